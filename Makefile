@@ -1,0 +1,38 @@
+# femcheck — every target creates .venv and installs the project if needed (fresh clone: Python 3.11 + pip).
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+CASE   ?= cases/haptic_6psu.toml
+export MPLBACKEND := Agg
+export PYVISTA_OFF_SCREEN := true
+
+.PHONY: venv verify test test-all bench sweep clean
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[dev]'
+	-$(PY) -m pip install --quiet 'pypardiso>=0.4'
+	touch $(STAMP)
+
+## Main job on the reference case: analytical (and FE, where available) verification tables under reports/verify/
+verify: $(STAMP)
+	$(PY) -m femcheck verify $(CASE) --out reports/verify
+
+## Default test suite (CI): everything not marked slow
+test: $(STAMP)
+	$(PY) -m pytest -m "not slow" -q
+
+## Whole test suite including the slow FE cases
+test-all: $(STAMP)
+	$(PY) -m pytest -q
+
+## Throughput and solve-time measurements -> reports/bench/<area>.json
+bench: $(STAMP)
+	$(PY) -m femcheck.bench
+
+clean:
+	rm -rf $(VENV) .pytest_cache build *.egg-info

@@ -1,0 +1,5 @@
+import sys
+
+from femcheck.cli import main
+
+sys.exit(main())

@@ -1,0 +1,50 @@
+"""Run every bench area (or those named on the command line) and write reports/bench/<area>.json."""
+from __future__ import annotations
+
+import importlib
+import json
+import pkgutil
+import platform
+import sys
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from femcheck.report.atomic import write_text_atomic
+
+
+def _areas():
+    import femcheck.bench as pkg
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        mod = importlib.import_module(f"femcheck.bench.{info.name}")
+        if hasattr(mod, "run") and hasattr(mod, "AREA"):
+            yield mod
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    out_dir = Path("reports/bench")
+    console = Console()
+    for mod in _areas():
+        if argv and mod.AREA not in argv:
+            continue
+        t0 = time.perf_counter()
+        figures = mod.run()
+        figures = {"bench_wall_s": round(time.perf_counter() - t0, 3), "machine": platform.processor() or platform.machine(), **figures}
+        table = Table(title=f"bench: {mod.AREA}")
+        table.add_column("figure")
+        table.add_column("value", justify="right")
+        for k, v in figures.items():
+            table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
+        console.print(table)
+        write_text_atomic(out_dir / f"{mod.AREA}.json", json.dumps(figures, indent=2) + "\n")
+        console.print(f"wrote {out_dir / (mod.AREA + '.json')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

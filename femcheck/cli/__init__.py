@@ -1,0 +1,70 @@
+"""femcheck command line. One module per subcommand in this package, each defining
+``register(app: typer.Typer)``; they are found automatically, so adding a command is adding a file.
+The library logs; only the CLI prints.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import pkgutil
+import sys
+
+import typer
+
+from femcheck.errors import FemcheckError
+
+app = typer.Typer(
+    name="femcheck",
+    help="Check compact analytical stiffness models of manipulators against finite elements and measured data.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+_registered = False
+
+
+def _register_all() -> None:
+    global _registered
+    if _registered:
+        return
+    import femcheck.cli as pkg
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        mod = importlib.import_module(f"femcheck.cli.{info.name}")
+        if hasattr(mod, "register"):
+            mod.register(app)
+    _registered = True
+
+
+def get_app() -> typer.Typer:
+    """The fully registered typer app (tests call it in-process with typer.testing.CliRunner)."""
+    _register_all()
+    return app
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: ``femcheck ...``. Known femcheck errors print one clear line and exit 2."""
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    _register_all()
+    try:
+        app(args=argv, prog_name="femcheck", standalone_mode=False)
+    except FemcheckError as exc:
+        typer.secho(f"error: {exc}", err=True, fg="red")
+        return 2
+    except SystemExit as exc:  # typer/click exit codes
+        return int(exc.code or 0)
+    except Exception as exc:  # click usage errors
+        import click
+        if isinstance(exc, click.exceptions.ClickException):
+            exc.show()
+            return exc.exit_code
+        if isinstance(exc, click.exceptions.Abort):
+            return 130
+        raise
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

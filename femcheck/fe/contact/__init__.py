@@ -1,0 +1,1 @@
+"""Contact between deformable bodies: pairing, penalty with friction, augmented Lagrangian."""

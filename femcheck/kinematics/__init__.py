@@ -1,0 +1,1 @@
+"""Kinematics: rigid-body frames and transforms, and the 6-PSU inverse kinematics."""

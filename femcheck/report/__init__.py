@@ -1,0 +1,1 @@
+"""Report writers (tables, HTML, plots); one module per report."""
