@@ -1,8 +1,9 @@
 """Case kinds and loading: ``[meta] kind`` picks the module that validates the file.
 
-A case-kind module lives in ``femcheck/case/`` and defines ``CASE_KIND`` (a string) and
-``build(raw: dict, path) -> case``; it is found automatically (one module per kind, meshio-style
-registry). A case object is a frozen dataclass with ``source``, ``sha256`` and ``raw_json`` fields.
+A case kind is the module ``femcheck/case/<kind>.py``, defining ``CASE_KIND = "<kind>"`` and
+``build(raw: dict, path) -> case`` (one module per kind, meshio-style registry). Only the module
+of the requested kind is imported. A case object is a frozen dataclass with ``source``,
+``sha256`` and ``raw_json`` fields (filled in here).
 """
 from __future__ import annotations
 
@@ -20,16 +21,31 @@ from femcheck.errors import CaseError
 _KINDS: dict[str, object] = {}
 
 
-def case_kinds() -> dict[str, object]:
-    """{kind: module} of every case kind found in the package."""
-    if not _KINDS:
+def case_kind_module(kind: str):
+    """The module of case kind ``kind`` or None."""
+    if kind not in _KINDS:
         import femcheck.case as pkg
-        for info in pkgutil.iter_modules(pkg.__path__):
-            mod = importlib.import_module(f"femcheck.case.{info.name}")
-            kind = getattr(mod, "CASE_KIND", None)
-            if kind and hasattr(mod, "build"):
-                _KINDS[kind] = mod
-    return _KINDS
+        names = {info.name for info in pkgutil.iter_modules(pkg.__path__)}
+        if kind not in names:
+            return None
+        mod = importlib.import_module(f"femcheck.case.{kind}")
+        if getattr(mod, "CASE_KIND", None) != kind or not hasattr(mod, "build"):
+            return None
+        _KINDS[kind] = mod
+    return _KINDS[kind]
+
+
+def case_kinds() -> list[str]:
+    """Names of the case kinds in the package (modules defining CASE_KIND and build)."""
+    import femcheck.case as pkg
+    kinds = []
+    for info in pkgutil.iter_modules(pkg.__path__):
+        try:
+            if case_kind_module(info.name) is not None:
+                kinds.append(info.name)
+        except Exception:  # a broken module is reported when its kind is requested
+            continue
+    return sorted(kinds)
 
 
 def _digest(raw: dict) -> str:
@@ -40,10 +56,10 @@ def build_case(raw: dict, path):
     """Validate a parsed document into the case object of its kind."""
     meta = raw.get("meta", {})
     kind = meta.get("kind", "haptic_6psu") if isinstance(meta, dict) else "haptic_6psu"
-    kinds = case_kinds()
-    if kind not in kinds:
-        raise CaseError(path, "meta.kind", f"unknown case kind {kind!r}; expected one of {sorted(kinds)}")
-    case = kinds[kind].build(raw, path)
+    module = case_kind_module(kind) if isinstance(kind, str) and kind.isidentifier() else None
+    if module is None:
+        raise CaseError(path, "meta.kind", f"unknown case kind {kind!r}; expected one of {case_kinds()}")
+    case = module.build(raw, path)
     return dataclasses.replace(case, source=str(path), sha256=_digest(raw), raw_json=json.dumps(raw, sort_keys=True))
 
 

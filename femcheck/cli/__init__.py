@@ -24,6 +24,13 @@ app = typer.Typer(
 _registered = False
 
 
+def console():
+    """A rich console that does not squeeze tables when output is not a terminal."""
+    from rich.console import Console
+    import sys as _sys
+    return Console(width=None if _sys.stdout.isatty() else 140)
+
+
 def _register_all() -> None:
     global _registered
     if _registered:
@@ -55,12 +62,15 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except SystemExit as exc:  # typer/click exit codes
         return int(exc.code or 0)
-    except Exception as exc:  # click usage errors
-        import click
-        if isinstance(exc, click.exceptions.ClickException):
+    except KeyboardInterrupt:
+        typer.secho("interrupted", err=True, fg="red")
+        return 130
+    except Exception as exc:
+        # usage errors of (typer's own copy of) click: they know how to show themselves
+        if hasattr(exc, "show") and hasattr(exc, "exit_code"):
             exc.show()
-            return exc.exit_code
-        if isinstance(exc, click.exceptions.Abort):
+            return int(exc.exit_code)
+        if type(exc).__name__ == "Abort":
             return 130
         raise
     return 0

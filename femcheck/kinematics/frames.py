@@ -11,9 +11,11 @@ import numpy as np
 def skew(r: np.ndarray) -> np.ndarray:
     """[r x]: (..., 3) -> (..., 3, 3) with skew(r) @ v == cross(r, v) (seed 000 eq. 6)."""
     r = np.asarray(r, dtype=float)
-    z = np.zeros(r.shape[:-1])
-    x, y, w = r[..., 0], r[..., 1], r[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+    out = np.zeros(r.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -r[..., 2], r[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = r[..., 2], -r[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -r[..., 1], r[..., 0]
+    return out
 
 
 def wrench_shift(r: np.ndarray) -> np.ndarray:
@@ -53,6 +55,8 @@ def rotate_compliance(R: np.ndarray, S_local: np.ndarray) -> np.ndarray:
 def rotvec_to_matrix(rv: np.ndarray) -> np.ndarray:
     """Rotation vector (..., 3) rad -> rotation matrix (..., 3, 3) (Rodrigues), exact at zero."""
     rv = np.asarray(rv, dtype=float)
+    if not rv.any():  # the common case of test poses: platform parallel to the base
+        return np.broadcast_to(np.eye(3), rv.shape[:-1] + (3, 3)).copy()
     th = np.linalg.norm(rv, axis=-1)[..., None, None]
     K = skew(rv)
     small = th < 1e-8

@@ -1,0 +1,77 @@
+"""``femcheck stiffness``: 6x6 TCP stiffness, deflection and element contributions at one pose."""
+from __future__ import annotations
+
+import json
+from enum import Enum
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from femcheck.case import load_case
+from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
+from femcheck.cli import console
+from femcheck.cli._common import parse_vector, select_pose
+from femcheck.kinematics.psu6 import condition_number, leg_geometry
+
+
+class ModelLevel(str, Enum):
+    simplified = "simplified"
+    detailed = "detailed"
+
+
+class Joints(str, Enum):
+    rigid = "rigid"
+    released = "released"
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("stiffness")
+    def stiffness_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML), e.g. cases/haptic_6psu.toml"),
+        model: ModelLevel = typer.Option(ModelLevel.detailed, "--model", help="simplified (links) or detailed (links + joints + actuation)"),
+        joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's [model] joint_rotations"),
+        point: str = typer.Option(None, "--point", help="test point P0..P8 (default P0)"),
+        pose: str = typer.Option(None, "--pose", help="TCP pose x,y,z,rx,ry,rz (m, rad; rotation vector)"),
+        wrench: str = typer.Option(None, "--wrench", help="TCP wrench fx,fy,fz,mx,my,mz (N, N m); default: the case's detailed test load along +z"),
+        as_json: bool = typer.Option(False, "--json", help="print one JSON object: K (6x6, SI), deflection (6, m and rad), contributions"),
+    ):
+        """6x6 stiffness at the TCP, deflection under a wrench, and the element contributions (seed 000 Fig. 23).
+
+        The detailed model's Hertz contacts are linearized at the given wrench (CONVENTIONS.md §6).
+        """
+        case = load_case(case_path)
+        P, label = select_pose(case, point, pose)
+        W = parse_vector(wrench, 6, "--wrench") if wrench else np.array([0, 0, case.loads.detailed_test_N, 0, 0, 0.0])
+        r = evaluate(case, P, W, model=model.value, joints=joints.value if joints else None, labels=[label])
+        contrib = {ELEMENT_NAMES[e]: float(r.contributions[0, j]) for j, e in enumerate(ELEMENTS)
+                   if r.element_energy[0, :, j].any()}
+        if as_json:
+            typer.echo(json.dumps({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model,
+                                   "joints": r.joints, "wrench": W.tolist(), "K": r.K[0].tolist(),
+                                   "deflection": r.twist[0].tolist(), "contributions": contrib}))
+            return
+        con = console()
+        con.print(f"[bold]{case.meta.name}[/] — {label}, model [bold]{r.model}[/], joints [bold]{r.joints}[/], "
+                  f"wrench {np.array2string(W, precision=3)} (N, N m)")
+        kt = Table(title="TCP stiffness K (SI: N/m | N/rad ; N m/m | N m/rad)")
+        for h in ("", "dx", "dy", "dz", "rx", "ry", "rz"):
+            kt.add_column(h, justify="right")
+        for i, h in enumerate(("Fx", "Fy", "Fz", "Mx", "My", "Mz")):
+            kt.add_row(h, *[f"{v:.4g}" for v in r.K[0, i]])
+        con.print(kt)
+        t = r.twist[0]
+        con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
+                  f"theta = [{t[3]*1e3:.5f}, {t[4]*1e3:.5f}, {t[5]*1e3:.5f}] mrad")
+        kd = [float(r.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
+        con.print("directional stiffness (1 / compliance along the axis): "
+                  + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+        legs = leg_geometry(case, P)
+        con.print(f"Jacobian condition number (homogenized, L = R_p): {condition_number(case, legs)[0]:.3f}; "
+                  f"slider positions {np.array2string(legs.slider[0]*1e3, precision=1)} mm")
+        ct = Table(title="contributions (share of deflection energy, CONVENTIONS.md §7)")
+        ct.add_column("element")
+        ct.add_column("share %", justify="right")
+        for name, v in contrib.items():
+            ct.add_row(name, f"{100*v:.1f}")
+        con.print(ct)
