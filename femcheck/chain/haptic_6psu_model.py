@@ -147,6 +147,58 @@ def _joint_rotation_twists(legs: LegGeometry) -> tuple[np.ndarray, np.ndarray]:
     return Jsp, Juj
 
 
+def _element_ingredients(case, legs: LegGeometry, p: DeviceParameters):
+    """Guideway tip compliance at B (n,6,6,6, frame U), U-joint translational compliance (n,6,3,3),
+    actuation compliance (n,6), link axial compliance (n,6) and link frames (n,6,3,3)."""
+    n = legs.n
+    R_lg = guideway_frames(case)
+    R_B = link_frames(legs.u)
+    S_lg_B = rot6(R_lg) @ cantilever_compliance(legs.slider, p.E_lg, p.G_lg, p.lg_section, p.beam_shear) @ rot6(R_lg).swapaxes(-1, -2)
+    uj_local = np.stack(np.broadcast_arrays(p.c_uc, p.c_uc, p.c_uc + p.c_ub), -1) * np.ones((n, 6, 1))
+    S_uj_tt = np.einsum("nlij,nlj,nlkj->nlik", R_B, uj_local, R_B)
+    c_act = np.broadcast_to(p.c_act, (n, 6))
+    prox_axial = p.L2 / (p.E_prox * p.prox_section.A) * np.ones((n, 6))
+    return S_lg_B, S_uj_tt, c_act, prox_axial, R_B
+
+
+def _element_compliances_at_C(legs: LegGeometry, p: DeviceParameters, scale, adjust: ChainAdjustments, parts):
+    """(n, 6, 5, 6, 6) compliance of each element carried to C_i (frame U), without the Hertz term
+    of the spherical joint (its slot holds only the joint-rotation springs, if any)."""
+    S_lg_B, S_uj_tt, c_act, _, R_B = parts
+    n = legs.n
+    S_e = np.zeros((n, 6, 5, 6, 6))
+    to_C = twist_shift(legs.C - legs.B)  # Jf(C - B)^T: twist at B -> twist at C
+    S_e[:, :, _LG] = to_C @ S_lg_B @ to_C.swapaxes(-1, -2)
+    S_e[:, :, _ACT, :3, :3] = c_act[..., None, None] * np.outer(legs.e, legs.e)
+    S_e[:, :, _PROX] = rot6(R_B) @ cantilever_compliance(p.L2, p.E_prox, p.G_prox, p.prox_section, p.beam_shear) @ rot6(R_B).swapaxes(-1, -2)
+    S_e[:, :, _UJ, :3, :3] = S_uj_tt
+    S_e = S_e * scale[..., None, None]
+    if adjust.joint_rotation_compliance:
+        Jsp, Juj = _joint_rotation_twists(legs)
+        c_rot = adjust.joint_rotation_compliance
+        S_e[:, :, _SP] += c_rot * Jsp @ Jsp.swapaxes(-1, -2)
+        S_e[:, :, _UJ] += c_rot * Juj @ Juj.swapaxes(-1, -2)
+    return S_e
+
+
+def chain_element_compliances(case, poses, k_sp=None, *, model: str = "detailed", params=None,
+                              adjust: ChainAdjustments | None = None) -> np.ndarray:
+    """(n, 6, 5, 6, 6) compliance of element e of chain i carried to C_i, frame U (CONVENTIONS.md §4).
+
+    ``k_sp`` (n, 6) N/m: the Hertz stiffness to put into the spherical joints (e.g. ``ChainResult.k_sp``);
+    None leaves their translational term out. The sum over elements is the chain compliance S_C,i.
+    """
+    P = as_poses(poses)
+    legs = leg_geometry(case, P)
+    p = _per_chain(params if params is not None else device_parameters(case))
+    adjust = adjust or ChainAdjustments()
+    scale = np.broadcast_to(_PRESENT[model] if adjust.element_scale is None else _PRESENT[model] * adjust.element_scale, (P.shape[0], 6, 5))
+    S_e = _element_compliances_at_C(legs, p, scale, adjust, _element_ingredients(case, legs, p))
+    if k_sp is not None and _PRESENT[model][0, _SP]:
+        S_e[:, :, _SP, :3, :3] += (scale[..., _SP] / np.asarray(k_sp))[..., None, None] * np.eye(3)
+    return S_e
+
+
 def _hertz(F, p: DeviceParameters):
     return hertz_tangent_stiffness(np.maximum(F, p.F_min_sp), p.E_star_sp, p.R_star_sp)
 
@@ -195,13 +247,7 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
         raise ValueError(f"backend: {backend!r}; expected 'compiled' or 'numpy'")
     p = _per_chain(params if params is not None else device_parameters(case))
     e = legs.e
-    R_lg = guideway_frames(case)
-    R_B = link_frames(legs.u)
-    S_lg_B = rot6(R_lg) @ cantilever_compliance(legs.slider, p.E_lg, p.G_lg, p.lg_section, p.beam_shear) @ rot6(R_lg).swapaxes(-1, -2)
-    uj_local = np.stack(np.broadcast_arrays(p.c_uc, p.c_uc, p.c_uc + p.c_ub), -1) * np.ones((n, 6, 1))
-    S_uj_tt = np.einsum("nlij,nlj,nlkj->nlik", R_B, uj_local, R_B)
-    c_act = np.broadcast_to(p.c_act, (n, 6))
-    prox_axial = p.L2 / (p.E_prox * p.prox_section.A) * np.ones((n, 6))
+    S_lg_B, S_uj_tt, c_act, prox_axial, R_B = _element_ingredients(case, legs, p)
     sp_present = bool(present[0, _SP] > 0)
 
     if joints == "released":
@@ -243,18 +289,7 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
         iterations = it + 1
     else:
         G = twist_shift(legs.C - legs.tcp[:, None, :])
-        S_e = np.zeros((n, 6, 5, 6, 6))
-        to_C = twist_shift(legs.C - legs.B)  # Jf(C - B)^T: twist at B -> twist at C
-        S_e[:, :, _LG] = to_C @ S_lg_B @ to_C.swapaxes(-1, -2)
-        S_e[:, :, _ACT, :3, :3] = c_act[..., None, None] * np.outer(e, e)
-        S_e[:, :, _PROX] = rot6(R_B) @ cantilever_compliance(p.L2, p.E_prox, p.G_prox, p.prox_section, p.beam_shear) @ rot6(R_B).swapaxes(-1, -2)
-        S_e[:, :, _UJ, :3, :3] = S_uj_tt
-        S_e = S_e * scale[..., None, None]
-        if adjust.joint_rotation_compliance:
-            Jsp, Juj = _joint_rotation_twists(legs)
-            c_rot = adjust.joint_rotation_compliance
-            S_e[:, :, _SP] += c_rot * Jsp @ Jsp.swapaxes(-1, -2)
-            S_e[:, :, _UJ] += c_rot * Juj @ Juj.swapaxes(-1, -2)
+        S_e = _element_compliances_at_C(legs, p, scale, adjust, (S_lg_B, S_uj_tt, c_act, prox_axial, R_B))
         S_fixed = S_e.sum(axis=2)
         M = np.linalg.inv(S_fixed)
         M = 0.5 * (M + M.swapaxes(-1, -2))

@@ -1,0 +1,36 @@
+"""``femcheck map``: stiffness map over a workspace slice (seed 000 Figs. 20-22)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from femcheck.case import load_case
+from femcheck.cli.stiffness import Joints, ModelLevel
+from femcheck.report.atomic import refuse_input_overwrite, write_bytes_atomic
+from femcheck.report.stiffness_map import plot_stiffness_map, stiffness_map
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("map")
+    def map_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML)"),
+        model: ModelLevel = typer.Option(ModelLevel.detailed, "--model"),
+        joints: Joints = typer.Option(None, "--joints", help="default: the case's idealization"),
+        z: float = typer.Option(0.025, "--z", help="slice height above the cube centre (m)"),
+        direction: str = typer.Option("x", "--direction", help="x, y or z"),
+        out: Path = typer.Option(..., "--out", help="output PNG file"),
+        half_width: float = typer.Option(0.1, "--half-width", help="half width of the mapped square (m)"),
+        resolution: int = typer.Option(81, "--resolution", help="grid points per side"),
+    ):
+        """Directional stiffness over a horizontal workspace slice, with the test cube drawn."""
+        if direction not in ("x", "y", "z"):
+            raise typer.BadParameter(f"--direction {direction!r}; expected x, y or z")
+        case = load_case(case_path)
+        refuse_input_overwrite(out, [case_path])
+        smap = stiffness_map(case, direction, z, model.value, joints.value if joints else None, half_width, resolution)
+        write_bytes_atomic(out, plot_stiffness_map(case, smap))
+        k = smap.k[~np.isnan(smap.k)]
+        typer.echo(f"wrote {out}: k_{direction} {k.min()/1e3:.2f}..{k.max()/1e3:.2f} N/mm over "
+                   f"{k.size}/{smap.k.size} reachable grid points at z = {smap.z*1e3:.0f} mm")

@@ -1,0 +1,18 @@
+"""Virtual joint method (VJM) stiffness models of serial and parallel robots (seeds 001, 002, 003).
+
+Modules, one concept each:
+
+* :mod:`~femcheck.vjm.dh` -- Denavit-Hartenberg chains (standard and modified/Craig), forward
+  kinematics and the geometric Jacobian at the tool point, vectorized over poses.
+* :mod:`~femcheck.vjm.cartesian_stiffness` -- C = J K_theta^-1 J^T, K = J^-T (K_theta - K_C) J^-1,
+  the complementary stiffness K_C of the external wrench, deflections (seed 002 eqs. 4-5, seed 003 eqs. 12-15).
+* :mod:`~femcheck.vjm.serial_vjm` -- a serial robot's VJM model (chain + springs) and its deflection under a wrench.
+* :mod:`~femcheck.vjm.drive_train` -- joint stiffness from motor, harmonic reducer and timing belt in series (seed 003 sec. 3).
+* :mod:`~femcheck.vjm.extended_vjm` -- three virtual joints per actuated joint and the least-squares identification
+  of their compliances (seed 002 eqs. 9-12), with configurations scored by the condition number.
+* :mod:`~femcheck.vjm.parallel_vjm` -- leg stiffness from the bordered compliance matrix, legs summed (seed 001 eqs. 2-6).
+* :mod:`~femcheck.vjm.rcube_geometry` -- the (assumed) R-CUBE leg geometry of the HISS haptic device (seed 001 sec. 2).
+* :mod:`~femcheck.vjm.weight_fitting` -- K' = W K W^T model fitting with restarts and the linear fine-tuning (seed 001 sec. 3).
+
+Importing the package does no work.
+"""
