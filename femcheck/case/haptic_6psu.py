@@ -14,7 +14,7 @@ from typing import Literal
 import numpy as np
 
 from femcheck.case.haptic_6psu_solid import SolidModel
-from femcheck.case.schema import Context, Material, build_materials, build_section, option, quantity
+from femcheck.case.schema import CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "haptic_6psu"
 
@@ -152,7 +152,7 @@ class Measurement:
 
 
 @dataclass(frozen=True)
-class Haptic6PSUCase:
+class Haptic6PSUCase(CaseVariants):
     """A validated 6-PSU device case. Immutable; variants via :meth:`with_params`."""
 
     meta: Meta
@@ -211,12 +211,6 @@ class Haptic6PSUCase:
         g, th = self.geometry, self.platform_angles_rad
         return np.stack([g.platform_radius_m * np.cos(th), g.platform_radius_m * np.sin(th), np.zeros(6)], axis=1)
 
-    def with_params(self, **dotted: float) -> "Haptic6PSUCase":
-        """A new, re-validated case with values changed by dotted key, e.g.
-        ``case.with_params(**{"guideway.width_radial_m": 0.016})``."""
-        from femcheck.case.registry import with_params
-        return with_params(self, dotted)
-
 
 SECTIONS = {
     "meta": Meta, "model": ModelOptions, "geometry": Geometry, "workspace": Workspace, "loads": Loads,
@@ -232,14 +226,5 @@ def build(raw: dict, path) -> Haptic6PSUCase:
     """Validate a parsed TOML document into a :class:`Haptic6PSUCase` (errors name file and key)."""
     ctx = Context(path)
     ctx.materials = build_materials(ctx, raw.get("materials"))
-    allowed = set(SECTIONS) | {"materials"}
-    unknown = sorted(set(raw) - allowed)
-    if unknown:
-        raise ctx.error(unknown[0], f"unknown section; expected one of {sorted(allowed)}")
-    parts = {}
-    for name, cls in SECTIONS.items():
-        table = raw.get(name, {} if name in OPTIONAL_SECTIONS else None)
-        if table is None:
-            raise ctx.error(name, f"required section [{name}] is missing")
-        parts[name] = build_section(ctx, name, cls, table)
+    parts = build_sections(ctx, raw, SECTIONS, OPTIONAL_SECTIONS, also_allowed=("materials",))
     return Haptic6PSUCase(materials=tuple(ctx.materials.values()), **parts)

@@ -20,7 +20,7 @@ from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import Context, build_section, option, quantity
+from femcheck.case.schema import CaseVariants, Context, build_section, build_sections, option, quantity
 from femcheck.vjm.rcube_geometry import RCubeGeometry
 
 CASE_KIND = "parallel_vjm"
@@ -100,7 +100,7 @@ class TestPoint:
 
 
 @dataclass(frozen=True)
-class ParallelVJMCase:
+class ParallelVJMCase(CaseVariants):
     """A validated parallel VJM case. Immutable."""
 
     meta: Meta
@@ -139,25 +139,15 @@ class ParallelVJMCase:
                 return tp
         raise KeyError(name)
 
-    def with_params(self, **dotted) -> "ParallelVJMCase":
-        from femcheck.case.registry import with_params
-        return with_params(self, dotted)
 
 
 def build(raw: dict, path) -> ParallelVJMCase:
     """Validate a parsed TOML document into a :class:`ParallelVJMCase` (errors name file and key)."""
     ctx = Context(path)
-    allowed = {"meta", "geometry", "links", "fitting", "test_points"}
-    unknown = sorted(set(raw) - allowed)
-    if unknown:
-        raise ctx.error(unknown[0], f"unknown section; expected one of {sorted(allowed)}")
-    for name in ("geometry", "links"):
-        if name not in raw:
-            raise ctx.error(name, f"required section [{name}] is missing")
-    meta = build_section(ctx, "meta", Meta, raw.get("meta", {"name": "unnamed"}))
-    geom = build_section(ctx, "geometry", Geometry, raw["geometry"])
-    links = build_section(ctx, "links", Links, raw["links"])
-    fitting = build_section(ctx, "fitting", Fitting, raw.get("fitting", {}))
+    parts = build_sections(ctx, {"meta": {"name": "unnamed"}, **raw},
+                           {"meta": Meta, "geometry": Geometry, "links": Links, "fitting": Fitting},
+                           optional=("fitting",), also_allowed=("test_points",))
+    meta, geom, links, fitting = parts["meta"], parts["geometry"], parts["links"], parts["fitting"]
     tps = raw.get("test_points", [])
     if not isinstance(tps, list):
         raise ctx.error("test_points", "expected [[test_points]] tables")

@@ -189,3 +189,29 @@ def build_materials(ctx: Context, table: Any) -> dict[str, Material]:
 def field_docs(cls: type) -> list[tuple[str, str, str]]:
     """(name, unit, doc) of every field of a case section, for generated documentation."""
     return [(f.name, f.metadata.get("unit", ""), f.metadata.get("doc", "")) for f in dataclasses.fields(cls)]
+
+
+def build_sections(ctx: Context, raw: dict, sections: dict[str, type], optional=(), also_allowed=()) -> dict:
+    """Validate the top-level tables of a case document: unknown sections and missing required ones
+    raise :class:`CaseError`; every section in ``sections`` is built with :func:`build_section`
+    (an optional one from an empty table, i.e. its defaults). ``also_allowed`` names tables that the
+    caller builds itself (e.g. ``materials``)."""
+    allowed = set(sections) | set(also_allowed)
+    unknown = sorted(set(raw) - allowed)
+    if unknown:
+        raise ctx.error(unknown[0], f"unknown section; expected one of {sorted(allowed)}")
+    parts = {}
+    for name, cls in sections.items():
+        table = raw.get(name, {} if name in optional else None)
+        if table is None:
+            raise ctx.error(name, f"required section [{name}] is missing")
+        parts[name] = build_section(ctx, name, cls, table)
+    return parts
+
+
+class CaseVariants:
+    """Mixin for case objects: ``case.with_params(**{"dotted.key": value})`` returns a re-validated variant."""
+
+    def with_params(self, **dotted):
+        from femcheck.case.registry import with_params
+        return with_params(self, dotted)

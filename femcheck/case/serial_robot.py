@@ -26,7 +26,7 @@ from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import Context, build_section, option, quantity
+from femcheck.case.schema import CaseVariants, Context, build_section, build_sections, option, quantity
 from femcheck.vjm import drive_train as dt
 from femcheck.vjm.dh import DHChain
 from femcheck.vjm.serial_vjm import SerialVJM
@@ -150,7 +150,7 @@ class Identification:
 
 
 @dataclass(frozen=True)
-class SerialRobotCase:
+class SerialRobotCase(CaseVariants):
     """A validated serial-robot VJM case. Immutable."""
 
     meta: Meta
@@ -194,23 +194,15 @@ class SerialRobotCase:
         return SerialVJM(chain=self.chain, k_theta=tuple(k), extended=ext,
                          tilt_offset_m=tuple(x.tilt_offset_m for x in self.joints) if ext else None)
 
-    def with_params(self, **dotted) -> "SerialRobotCase":
-        from femcheck.case.registry import with_params
-        return with_params(self, dotted)
 
 
 def build(raw: dict, path) -> SerialRobotCase:
     """Validate a parsed TOML document into a :class:`SerialRobotCase` (errors name file and key)."""
     ctx = Context(path)
-    allowed = {"meta", "model", "kinematics", "joints", "identification"}
-    unknown = sorted(set(raw) - allowed)
-    if unknown:
-        raise ctx.error(unknown[0], f"unknown section; expected one of {sorted(allowed)}")
-    meta = build_section(ctx, "meta", Meta, raw.get("meta", {"name": "unnamed"}))
-    model = build_section(ctx, "model", ModelOptions, raw.get("model", {}))
-    if "kinematics" not in raw:
-        raise ctx.error("kinematics", "required section [kinematics] is missing")
-    kin = build_section(ctx, "kinematics", Kinematics, raw["kinematics"])
+    parts = build_sections(ctx, {"meta": {"name": "unnamed"}, **raw},
+                           {"meta": Meta, "model": ModelOptions, "kinematics": Kinematics},
+                           optional=("model",), also_allowed=("joints", "identification"))
+    meta, model, kin = parts["meta"], parts["model"], parts["kinematics"]
     rows = raw.get("joints")
     if not isinstance(rows, list) or not rows:
         raise ctx.error("joints", "expected one or more [[joints]] tables (one per DH row)")
