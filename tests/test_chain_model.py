@@ -241,3 +241,18 @@ def test_public_api_shapes_and_units(case, points):
     assert np.abs(np.einsum("nij,nj->ni", K, t) - [15, 0, 0, 0, 0, 0]).max() < 1e-9   # K t = W
     Ks = femcheck.stiffness(case, points[:1], model="detailed", wrench=None)   # unloaded: joints at F_min
     assert (np.linalg.eigvalsh(Ks) > 0).all()
+
+
+@pytest.mark.parametrize("joints", ["rigid", "released"])
+def test_mirror_symmetry_about_the_xz_plane(case, points, joints):
+    """The device is symmetric under y -> -y (pairs are symmetric about the x axis). Rotations are axial
+    vectors, so a twist transforms with blockdiag(M, -M) for the reflection M = diag(1, -1, 1)."""
+    M = np.diag([1.0, -1.0, 1.0])
+    T6 = np.block([[M, np.zeros((3, 3))], [np.zeros((3, 3)), -M]])
+    p = points[[2, 6]]                   # P2 (+,-,-) and P6 (+,-,+) mirror onto P3 and P7
+    q = points[[3, 7]]
+    W = np.array([12.0, 5.0, -4.0, 0, 0, 0])
+    a = evaluate(case, p, W, joints=joints)
+    b = evaluate(case, q, T6 @ W, joints=joints)
+    assert np.abs(b.K - T6 @ a.K @ T6).max() < 1e-9 * np.abs(a.K).max()   # round-off of trig + inverses
+    assert np.abs(b.twist - a.twist @ T6).max() < 1e-9 * np.abs(a.twist).max()
