@@ -34,5 +34,12 @@ test-all: $(STAMP)
 bench: $(STAMP)
 	$(PY) -m femcheck.bench
 
+## Example parameter sweep on the reference case (Sobol' design, detailed model) -> reports/sweep/reference/
+sweep: $(STAMP)
+	$(PY) -m femcheck sweep $(CASE) --param guideway.width_radial_m=0.010:0.020 \
+		--param guideway.depth_tangential_m=0.008:0.014 --param proximal_link.outer_diameter_m=0.0055:0.009 \
+		--param actuation.cable_diameter_m=0.0008:0.0015 --param spherical_joint.ball_radius_m=0.0025:0.005 \
+		--design sobol --samples 1024 --model detailed --out reports/sweep/reference --resume
+
 clean:
 	rm -rf $(VENV) .pytest_cache build *.egg-info

@@ -89,14 +89,13 @@ def with_params(case, dotted: dict[str, object]):
         parts = key.split(".")
         node = raw
         for p in parts[:-1]:
-            if not isinstance(node, dict) or p not in node:
+            if not isinstance(node, dict):
                 raise CaseError(label, key, "no such table in the case")
-            node = node[p]
+            # an optional table may be absent from the file (its fields have defaults): create it and
+            # let validation decide whether the key exists
+            node = node.setdefault(p, {})
         if not isinstance(node, dict):
             raise CaseError(label, key, "no such key in the case")
-        if parts[-1] not in node:
-            # a key may be absent because it has a default; let validation decide whether it exists
-            pass
         node[parts[-1]] = value
     new = build_case(raw, label)
     return new

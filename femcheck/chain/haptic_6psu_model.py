@@ -210,7 +210,7 @@ def _check_converged(history, it):
 
 def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str | None = None,
              params: DeviceParameters | None = None, adjust: ChainAdjustments | None = None,
-             labels=None, backend: str = "compiled") -> ChainResult:
+             labels=None, backend: str = "compiled", legs: LegGeometry | None = None) -> ChainResult:
     """Stiffness, deflection and element breakdown of the 6-PSU device at n poses.
 
     Parameters
@@ -224,6 +224,8 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
     params : element parameters (default: from the case; arrays of shape (n,) for sweeps)
     adjust : :class:`ChainAdjustments` (element scales, joint rotation compliance)
     labels : optional pose names for error messages (e.g. "P3")
+    legs : the inverse kinematics of ``poses`` if already computed (``leg_geometry(case, poses)``), so
+        that sweeps over several load cases do not repeat it
     backend : "compiled" (numba kernel, default) or "numpy" (the readable vectorized reference);
         the two agree to 1e-10 relative (tests/test_chain_backends.py)
     """
@@ -235,7 +237,10 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
     P = as_poses(poses)
     n = P.shape[0]
     W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
-    legs = leg_geometry(case, P, labels=labels)
+    if legs is None:
+        legs = leg_geometry(case, P, labels=labels)
+    elif legs.n != n:
+        raise ValueError(f"legs: computed for {legs.n} poses, got {n} poses")
     adjust = adjust or ChainAdjustments()
     present = _PRESENT[model]
     scale = present if adjust.element_scale is None else present * np.asarray(adjust.element_scale, float)

@@ -1,0 +1,110 @@
+"""``femcheck sweep``: parameter sweeps of the analytical stiffness models, sensitivity, HTML summary."""
+from __future__ import annotations
+
+from enum import Enum
+
+import typer
+
+
+class Design(str, Enum):
+    grid = "grid"
+    lhs = "lhs"
+    sobol = "sobol"
+
+
+class SweepModel(str, Enum):
+    simplified = "simplified"
+    detailed = "detailed"
+    fe = "fe"
+
+
+class Joints(str, Enum):
+    rigid = "rigid"
+    released = "released"
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("sweep")
+    def sweep_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML), e.g. cases/haptic_6psu.toml"),
+        param: list[str] = typer.Option(..., "--param", help="KEY=LO:HI[:N|log], SI units of the key; repeat per parameter"),
+        design: Design = typer.Option(Design.lhs, "--design", help="grid (levels N per key), lhs, or sobol (Saltelli, gives Sobol' indices)"),
+        samples: int = typer.Option(None, "--samples", help="lhs: samples; sobol: base samples n (power of 2; n (d+2) runs); grid: default levels"),
+        model: SweepModel = typer.Option(SweepModel.detailed, "--model", help="simplified | detailed | fe (fe needs the FE verification)"),
+        joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's model.joint_rotations"),
+        points: str = typer.Option("cube", "--points", help="cube (P0..P8) or a list such as P0,P3"),
+        out: str = typer.Option(None, "--out", help="output folder (default reports/sweep/<case name>)"),
+        scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address tcp://host:port (or env FEMCHECK_SCHEDULER)"),
+        resume: bool = typer.Option(False, "--resume", help="continue a sweep in --out, skipping finished samples"),
+        jobs: int = typer.Option(None, "--jobs", help="local worker processes (default: CPU count; 0 = in this process)"),
+        seed: int = typer.Option(0, "--seed", help="seed of the lhs / sobol design"),
+        chunk: int = typer.Option(None, "--chunk", help="samples per task (default about 20,000 sample-points)"),
+        no_report: bool = typer.Option(False, "--no-report", help="skip the HTML summary"),
+    ):
+        """Sweep case parameters; store results (Parquet), elasticities, Sobol' indices and an HTML summary.
+
+        Example: femcheck sweep cases/haptic_6psu.toml --param guideway.width_radial_m=0.010:0.020
+        --param proximal_link.outer_diameter_m=0.006:0.010 --design sobol --samples 256
+        """
+        from pathlib import Path
+
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+        from rich.table import Table
+
+        from femcheck.case import load_case
+        from femcheck.cli import console
+        from femcheck.report.atomic import refuse_input_overwrite
+        from femcheck.sweep.analysis import analyse, local_elasticities
+        from femcheck.sweep.parameters import parse_params
+        from femcheck.sweep.report import write_report
+        from femcheck.sweep.run import parse_points, preflight, run_sweep
+
+        case = load_case(case_path)
+        ranges = parse_params(case, list(param))
+        pts = parse_points(points)
+        out_dir = Path(out) if out else Path("reports/sweep") / Path(case_path).stem
+        refuse_input_overwrite(out_dir, [case_path])
+        preflight(case, out_dir, model=model.value, joints=joints.value if joints else None, resume=resume)
+        con = console()
+        con.print(f"[bold]{case.meta.name}[/]: sweeping " + ", ".join(
+            f"{r.key} {r.lo:g}..{r.hi:g}{' (log)' if r.log else ''}" for r in ranges)
+            + f" — design {design.value}, model {model.value}, points {','.join(pts)}")
+        with Progress(TextColumn("[bold]sweep"), BarColumn(), MofNCompleteColumn(), TextColumn("tasks"),
+                      TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=con,
+                      transient=False) as bar:
+            tid = bar.add_task("sweep", total=None)
+            outcome = run_sweep(case, ranges, out_dir, design=design.value, samples=samples, seed=seed,
+                                model=model.value, joints=joints.value if joints else None, points=pts,
+                                scheduler=scheduler, jobs=jobs, resume=resume, chunk_samples=chunk,
+                                on_progress=lambda done, total: bar.update(tid, completed=done, total=total))
+        man = outcome.manifest
+        t = man["timing"]
+        rate = t.get("sample_points_per_s")
+        con.print(f"{man['design']['samples']} samples x {len(pts)} points = {man['sample_points']} sample-points; "
+                  f"evaluated {t['sample_points_evaluated']} this run in {t['compute_wall_s']:.2f} s on {t['backend']} "
+                  f"({t['workers']} workers)" + (f", {rate:.3g} sample-points/s" if rate else "")
+                  + f"; {man['resumed_with_finished_samples']} samples reused")
+        an = analyse(outcome)
+        if not an.ok.all():
+            con.print(f"[yellow]{int((~an.ok).sum())} of {an.ok.size} samples could not be evaluated at every point "
+                      "(unreachable or not converged); they are stored with ok = false and NaN results[/]")
+        local = local_elasticities(case, ranges, model=model.value, joints=joints.value if joints else None, points=pts)
+        tab = Table(title="elasticity d ln k_min / d ln p (global over the box | local at nominal)")
+        tab.add_column("load")
+        for r in ranges:
+            tab.add_column(r.key, justify="right")
+        for name in an.elasticity:
+            tab.add_row(name, *[f"{g:.3f} | {l:.3f}" for g, l in zip(an.elasticity[name], local[name])])
+        con.print(tab)
+        if an.sobol_first is not None:
+            st = Table(title=f"Sobol' indices of k_min ({an.sobol_method})")
+            st.add_column("output")
+            for r in ranges:
+                st.add_column(r.key, justify="right")
+            for name, s in an.sobol_first.items():
+                tot = an.sobol_total[name] if an.sobol_total is not None else [float("nan")] * len(s)
+                st.add_row(name, *[f"S {a:.3f} / ST {b:.3f}" for a, b in zip(s, tot)])
+            con.print(st)
+        con.print(f"results: {outcome.store.results_path}  manifest: {outcome.store.manifest_path}")
+        if not no_report:
+            con.print(f"summary: {write_report(outcome, an, local)}")

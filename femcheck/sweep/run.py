@@ -1,0 +1,165 @@
+"""A whole sweep, as ``femcheck sweep`` runs it: design -> keys -> skip finished -> tasks -> store.
+
+:func:`run_sweep` is generic over the per-chunk task function (``TASK_FUNCTIONS`` maps a model to
+it); FE samples plug in as one more entry once the whole-device FE verification exists.
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import logging
+import math
+import time
+
+import numpy as np
+
+from femcheck.errors import CaseError, FemcheckError
+from femcheck.sweep.design import Design, make_design
+from femcheck.sweep.evaluate_analytical import AnalyticalTask, run_analytical_task
+from femcheck.sweep.executor import SweepInterrupted, run_tasks, scheduler_address
+from femcheck.sweep.parameters import ParameterRange
+from femcheck.sweep.store import SweepStore, code_version, sample_keys, software_versions
+
+log = logging.getLogger(__name__)
+
+#: model -> per-chunk task function (picklable, top level)
+TASK_FUNCTIONS = {"simplified": run_analytical_task, "detailed": run_analytical_task}
+MODELS = ("simplified", "detailed", "fe")
+#: target size of one task, in sample-points (a few seconds of the detailed model)
+CHUNK_SAMPLE_POINTS = 20_000
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepOutcome:
+    """A finished sweep: its folder, design, ranges, the result table (pyarrow) and the manifest."""
+
+    store: SweepStore
+    design: Design
+    ranges: tuple[ParameterRange, ...]
+    points: tuple[str, ...]
+    table: object
+    manifest: dict
+
+
+def parse_points(text: str | None) -> tuple[str, ...]:
+    """``cube`` (P0..P8) or a comma-separated list of labels -> tuple of labels."""
+    from femcheck.kinematics.psu6 import POINT_LABELS
+    if not text or text.strip().lower() == "cube":
+        return POINT_LABELS
+    labels = tuple(p.strip().upper() for p in text.split(",") if p.strip())
+    bad = [p for p in labels if p not in POINT_LABELS]
+    if bad or not labels:
+        raise CaseError("--points", text, f"expected 'cube' or labels from {', '.join(POINT_LABELS)}")
+    if len(set(labels)) != len(labels):
+        raise CaseError("--points", text, "a point is listed twice")
+    return labels
+
+
+def _utc() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def preflight(case, out_dir, *, model: str, joints: str | None, resume: bool) -> None:
+    """The checks :func:`run_sweep` makes before any work (the CLI calls it before its progress bar)."""
+    if model == "fe":
+        raise FemcheckError("--model fe: FE sweeps need the whole-device FE verification (`femcheck verify`), "
+                            "which is not available yet; use --model simplified or --model detailed")
+    if model not in TASK_FUNCTIONS:
+        raise CaseError("--model", model, f"expected one of {list(MODELS)}")
+    if (joints or case.model.joint_rotations) not in ("rigid", "released"):
+        raise CaseError("--joints", joints, "expected rigid or released")
+    if SweepStore(out_dir).has_results() and not resume:
+        raise FemcheckError(f"{out_dir} already holds sweep results; pass --resume to continue or reuse them, "
+                            "or choose another --out")
+
+
+def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs", samples: int | None = None,
+              seed: int = 0, model: str = "detailed", joints: str | None = None, points=None,
+              scheduler: str | None = None, jobs: int | None = None, resume: bool = False,
+              chunk_samples: int | None = None, task_fn=None, on_progress=None) -> SweepOutcome:
+    """Run (or resume) a sweep of ``case`` over ``ranges`` into ``out_dir``; see docs/sweep.md.
+
+    ``points``: tuple of labels (default: the cube P0..P8); ``jobs``: local worker processes (0 = in
+    this process; default the CPU count); ``scheduler``: Dask address (or ``$FEMCHECK_SCHEDULER``);
+    ``chunk_samples``: samples per task (default about :data:`CHUNK_SAMPLE_POINTS` sample-points);
+    ``task_fn``: replaces the model's task function (tests, future FE).
+    """
+    preflight(case, out_dir, model=model, joints=joints, resume=resume)
+    joints = joints or case.model.joint_rotations
+    points = tuple(points) if points else parse_points("cube")
+    store = SweepStore(out_dir)
+    started, t0 = _utc(), time.perf_counter()
+    des = make_design(ranges, design, samples, seed)
+    keys = tuple(r.key for r in ranges)
+    options = {"model": model, "joints": joints, "points": list(points), "directions": list(case.loads.directions)}
+    version = code_version()
+    skeys = sample_keys(case.sha256, keys, des.values, options, version)
+    done = store.finished_keys() if resume else set()
+    todo = np.array([i for i, k in enumerate(skeys) if k not in done], dtype=int)
+    n_pts = len(points)
+    manifest = {
+        "kind": "femcheck sweep", "status": "running", "case": {"source": case.source, "sha256": case.sha256,
+                                                              "name": getattr(case.meta, "name", "")},
+        "parameters": [r.as_dict() for r in ranges],
+        "design": {"kind": des.kind, "samples": des.m, "n_base": des.n_base, "seed": seed,
+                   "levels": list(des.levels) if des.levels else None},
+        "options": options, "code_version": version, "versions": software_versions(),
+        "sample_points": des.m * n_pts, "resumed_with_finished_samples": int(des.m - len(todo)),
+        "timing": {"started_utc": started},
+    }
+    store.write_manifest(manifest)
+    design_cols = {"sample_id": np.arange(des.m), "sample_key": np.asarray(skeys, dtype=object),
+                   "block": des.block, "base": des.base}
+    design_cols.update({r.column: des.values[:, j] for j, r in enumerate(ranges)})
+    store.write_design(design_cols)
+
+    address = scheduler_address(scheduler)
+    if chunk_samples is None:
+        chunk_samples = max(1, CHUNK_SAMPLE_POINTS // n_pts)
+        if not address:  # at least ~4 tasks per local worker for balance, when there is enough work
+            import os
+            workers = 1 if jobs == 0 else (jobs or os.cpu_count() or 1)
+            chunk_samples = max(1, min(chunk_samples, math.ceil(len(todo) / (4 * max(workers, 1)))))
+    kinds = tuple(r.kind for r in ranges)
+    tasks = [AnalyticalTask(case=case, keys=keys, kinds=kinds, values=des.values[idx], sample_ids=idx,
+                            sample_keys=tuple(skeys[i] for i in idx), model=model, joints=joints, points=points)
+             for idx in (todo[s:s + chunk_samples] for s in range(0, len(todo), chunk_samples))]
+    log.info("sweep: %d samples x %d points, %d to evaluate in %d tasks", des.m, n_pts, len(todo), len(tasks))
+
+    def stop(status: str, exc_done: int):
+        manifest["status"] = status
+        manifest["timing"].update({"stopped_utc": _utc(), "wall_s": time.perf_counter() - t0,
+                                   "tasks_finished_this_run": exc_done, "tasks_this_run": len(tasks)})
+        store.write_manifest(manifest)
+
+    finished = [0]
+
+    def on_result(task, result):
+        store.write_chunk(result)
+        finished[0] += 1
+
+    try:
+        timing = run_tasks(task_fn or TASK_FUNCTIONS[model], tasks, on_result=on_result, jobs=jobs,
+                           scheduler=address, on_progress=on_progress)
+    except SweepInterrupted:
+        stop("interrupted", finished[0])
+        raise
+    except KeyboardInterrupt:
+        stop("interrupted", finished[0])
+        raise
+    table = store.results_for(skeys, n_pts)
+    if table is None:
+        stop("incomplete", finished[0])
+        raise FemcheckError(f"{store.root}: some samples have no result after the run; run again with --resume")
+    store.write_results(table)
+    wall = time.perf_counter() - t0
+    n_eval = len(todo) * n_pts
+    manifest["status"] = "complete"
+    manifest["timing"].update({
+        "finished_utc": _utc(), "wall_s": wall, "compute_wall_s": timing["wall_s"], "backend": timing["backend"],
+        "workers": timing["workers"], "tasks": timing["tasks"], "sample_points_evaluated": n_eval,
+        "sample_points_per_s": n_eval / timing["wall_s"] if timing["wall_s"] > 0 else None,
+    })
+    manifest["sample_points_ok"] = int(np.sum(table.column("ok").to_numpy(zero_copy_only=False)))
+    store.write_manifest(manifest)
+    return SweepOutcome(store=store, design=des, ranges=tuple(ranges), points=points, table=table, manifest=manifest)
