@@ -180,3 +180,14 @@ def test_cli_writes_store_manifest_and_html(tmp_path):
                                            "--out", str(out), "--resume", "--no-report"])
     assert again.exit_code == 0, again.output
     assert "32 samples reused" in " ".join(again.output.split())
+
+
+def test_single_parameter_sobol_design_reports_indices(tmp_path):
+    """Regression: with one parameter scipy returns scalars; the indices must still be one per parameter."""
+    from typer.testing import CliRunner
+    from femcheck.cli import get_app
+    res = CliRunner().invoke(get_app(), ["sweep", "cases/haptic_6psu.toml", "--param", "guideway.width_radial_m=0.010:0.020",
+                                         "--design", "sobol", "--samples", "16", "--model", "simplified",
+                                         "--out", str(tmp_path / "s"), "--jobs", "0", "--no-report"])
+    assert res.exit_code == 0, res.output
+    assert "Sobol" in res.output and "guideway.width_radial_m" in res.output

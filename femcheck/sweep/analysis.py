@@ -153,8 +153,11 @@ def sobol_indices(des, outputs: dict, ok: np.ndarray):
         f_AB = np.stack([Y[:, des.block == BLOCK_AB + i] for i in range(d)])
         res = scipy_sobol(func={"f_A": f_A, "f_B": f_B, "f_AB": f_AB}, n=n)
         names = list(outputs)
-        return ({k: res.first_order[i] for i, k in enumerate(names)},
-                {k: res.total_order[i] for i, k in enumerate(names)},
+        # scipy drops the parameter axis when there is a single parameter: restore (outputs, d)
+        first = np.reshape(res.first_order, (len(names), d))
+        total = np.reshape(res.total_order, (len(names), d))
+        return ({k: first[i] for i, k in enumerate(names)},
+                {k: total[i] for i, k in enumerate(names)},
                 f"Saltelli design, n = {n} base samples, {des.m} evaluations (scipy.stats.sobol_indices: "
                 "Saltelli 2010 first order, Jansen 1999 total)")
     if des.kind == "grid" and d >= 1:
