@@ -1,0 +1,79 @@
+"""``femcheck diagnose CASE MEASURED.csv``: where the model is wrong, the physical cause, the extended model
+and its held-out gain (issue 7; docs/diagnose.md)."""
+from __future__ import annotations
+
+import json
+from enum import Enum
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from femcheck.case import load_case
+from femcheck.cli import console
+
+
+class ModelLevel(str, Enum):
+    simplified = "simplified"
+    detailed = "detailed"
+
+
+class Joints(str, Enum):
+    rigid = "rigid"
+    released = "released"
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("diagnose")
+    def diagnose_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML), e.g. cases/haptic_6psu.toml"),
+        measured: str = typer.Argument(..., metavar="MEASURED.csv", help="measured-data CSV (docs/diagnose.md)"),
+        model: ModelLevel = typer.Option(ModelLevel.detailed, "--model", help="analytical model to check"),
+        joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's [model] joint_rotations"),
+        json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file"),
+        report: str = typer.Option(None, "--report", help="write report.md, report.html and plots into this folder"),
+        max_effects: int = typer.Option(2, "--max-effects", min=1, max=3, help="most effects greedy selection may name"),
+    ):
+        """Residuals of the model against measured deflections, the physical causes (effect library), the
+        fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
+        from femcheck.diagnose import AnalyticalChainModel, diagnose
+        from femcheck.measured import process, read_measured_csv
+        from femcheck.report.atomic import refuse_input_overwrite, write_text_atomic
+
+        case = load_case(case_path)
+        for out in (json_out,) + ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
+            if out:
+                refuse_input_overwrite(out, [case_path, measured])
+        readings = process(read_measured_csv(measured), case)
+        m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
+        d = diagnose(m, readings, max_effects=max_effects)
+        result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
+        if json_out:
+            write_text_atomic(json_out, json.dumps(result, indent=2, default=float))
+        if report:
+            from femcheck.diagnose.report import write_report
+            write_report(d, readings, case, measured, report)
+        con = console()
+        con.print(f"[bold]{case.meta.name}[/] vs {measured}: model [bold]{d.model_name}[/]; "
+                  f"{readings.n_cases} cases, reading uncertainty {readings.reading_sigma_m * 1e6:.2f} um")
+        t = Table(title="named causes" if d.significant else "no significant cause (none)")
+        for h in ("cause", "location", "parameters (95 % interval)"):
+            t.add_column(h)
+        for c in d.causes:
+            t.add_row(c.id, c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
+                                                 for k, v in c.params.items()))
+        con.print(t)
+        e = Table(title="held-out mean relative error of the deflection (%)")
+        keys = list(d.heldout_error_before)
+        e.add_column("model")
+        for k in keys:
+            e.add_column(k, justify="right")
+        e.add_row("as given", *[f"{100 * d.heldout_error_before[k]:.1f}" for k in keys])
+        e.add_row("extended", *[f"{100 * d.heldout_error_after[k]:.1f}" for k in keys])
+        if d.baseline_error:
+            e.add_row("seed 001 weight fit", *[f"{100 * d.baseline_error.get(k, float('nan')):.1f}" for k in keys])
+        con.print(e)
+        for w in d.warnings:
+            con.print(f"[yellow]warning:[/] {w}")
+        if report:
+            con.print(f"report: {Path(report) / 'report.html'}")

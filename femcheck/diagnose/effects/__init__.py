@@ -1,0 +1,111 @@
+"""Library of model extensions: one module per physical effect (issue 7 item 4), behind a small registry.
+
+Each module defines ``EFFECT``, an :class:`Effect` with its id (the vocabulary of the issue), parameters
+with bounds, an ``apply`` that changes a :class:`~femcheck.diagnose.model.WorkingState`, the location it
+reports and a sampler of random hidden truths (for the virtual experiment and the tests). Adding an
+effect is adding a module.
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import pkgutil
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class Param:
+    """A fitted parameter: ``name`` (with unit suffix), bounds ``lower``/``upper`` (natural units), ``start``,
+    ``log`` (optimized as log10), ``typical`` (optimizer scale for linear parameters), ``doc``."""
+
+    name: str
+    lower: float
+    upper: float
+    start: float
+    log: bool = False
+    typical: float = 1.0
+    doc: str = ""
+
+    def to_x(self, v):
+        return np.log10(v) if self.log else np.asarray(v) / self.typical
+
+    def from_x(self, x):
+        return 10.0 ** np.asarray(x) if self.log else np.asarray(x) * self.typical
+
+
+class Effect:
+    """Base class. Subclasses set ``id``, ``stage`` (application order), ``params`` and implement
+    ``apply(model, readings, values, state)``."""
+
+    id: str = ""
+    stage: int = 0
+    params: tuple[Param, ...] = ()
+    #: value of each parameter that means "no effect" for a model with these base scales
+    def neutral(self, model) -> np.ndarray:
+        return np.array([p.start for p in self.params])
+
+    def applicable(self, model) -> bool:
+        return True
+
+    def starts(self, model) -> list[np.ndarray]:
+        """Start vectors (natural units) for the fit; several for non-convex effects."""
+        return [np.array([p.start for p in self.params])]
+
+    def apply(self, model, readings, values, state) -> None:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def location(self, values, ci_low, ci_high) -> str:
+        return "device"
+
+    def sample_truth(self, rng, case) -> dict[str, float]:
+        """Random hidden magnitude and location (natural units) used by the tests and ``experiment simulate``."""
+        return {}
+
+    @property
+    def param_names(self) -> list[str]:
+        return [p.name for p in self.params]
+
+    def values_from(self, given: dict[str, float], model) -> np.ndarray:
+        """Parameter vector from a (possibly partial) dict; unnamed parameters take their neutral value."""
+        unknown = sorted(set(given) - set(self.param_names))
+        if unknown:
+            raise KeyError(f"effect {self.id}: unknown parameter {unknown[0]!r}; expected one of {self.param_names}")
+        v = self.neutral(model).astype(float)
+        for i, p in enumerate(self.params):
+            if p.name in given:
+                v[i] = float(given[p.name])
+        return v
+
+
+def _discover() -> dict[str, Effect]:
+    import femcheck.diagnose.effects as pkg
+    out = {}
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
+        mod = importlib.import_module(f"{pkg.__name__}.{info.name}")
+        eff = getattr(mod, "EFFECT", None)
+        if eff is not None:
+            out[eff.id] = eff
+    return out
+
+
+_REGISTRY: dict[str, Effect] | None = None
+
+
+def effects() -> dict[str, Effect]:
+    """All registered effects by id (the issue's vocabulary, including ``none``)."""
+    global _REGISTRY
+    if _REGISTRY is None:
+        _REGISTRY = _discover()
+    return _REGISTRY
+
+
+def get_effect(effect_id: str) -> Effect:
+    reg = effects()
+    if effect_id not in reg:
+        raise KeyError(f"unknown effect {effect_id!r}; expected one of {', '.join(sorted(reg))}")
+    return reg[effect_id]
+
+
+VOCABULARY = ("joint_contact_compliance", "actuation_compliance", "clearance", "hertz_stiffening", "leg_softening",
+              "link_modulus", "friction_hysteresis", "sensor_misalignment", "joint_rotation_release", "none")

@@ -1,0 +1,164 @@
+"""Fit effect parameters to the readings (issue 7 item 5): bounded nonlinear least squares
+(``scipy.optimize.least_squares``, trust-region reflective), covariance from the Jacobian and
+identifiability warnings.
+
+Cost: chi^2 = sum_states sum_axes ((d_model - d_meas) / sigma)^2 over the trial-averaged readings of
+:class:`~femcheck.measured.Readings` (preload, total, unload and sweep states), i.e. -2 log L up to a
+constant for Gaussian reading noise. Parameters are optimized in scaled coordinates (log10 for
+``Param.log``, value / typical otherwise).
+
+Uncertainty: with J the Jacobian of the weighted residuals at the optimum (scaled coordinates),
+``cov = s^2 (J^T J)^-1``, ``s^2 = max(1, chi^2 / (N - k))`` (inflated when the fit is worse than the noise),
+95 % intervals x +- 1.96 sqrt(cov_jj) mapped back to natural units. A parameter is flagged as not
+identifiable (the idea of seed 001 Table 2, there from the spread over restarts) when its interval is wider
+than its value allows (relative half-width > 1 for linear parameters, > 1 decade for log ones), when it is
+nearly collinear with another (|corr| > 0.98), or when J^T J is numerically singular.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from femcheck.diagnose.model import predict_readings
+
+log = logging.getLogger(__name__)
+
+_Z95 = 1.959963984540054
+_CORR_LIMIT = 0.98
+
+
+@dataclasses.dataclass(frozen=True)
+class FitResult:
+    """A fitted model: ``effects`` (tuple of Effect), ``values``/``ci_low``/``ci_high`` (tuple of (k_e,) arrays,
+    natural units), ``chi2`` on the fitted states, ``n_data``, ``n_params``, ``bic``, ``aic``, ``warnings``,
+    ``predicted`` (m, 3) readings of all states, m."""
+
+    effects: tuple
+    values: tuple
+    ci_low: tuple
+    ci_high: tuple
+    chi2: float
+    n_data: int
+    n_params: int
+    warnings: tuple[str, ...]
+    predicted: np.ndarray
+    nfev: int = 0
+
+    @property
+    def bic(self) -> float:
+        """Bayesian information criterion chi^2 + k ln N (Schwarz)."""
+        return self.chi2 + self.n_params * np.log(max(self.n_data, 1))
+
+    @property
+    def aic(self) -> float:
+        return self.chi2 + 2.0 * self.n_params
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return tuple(e.id for e in self.effects)
+
+    def params(self, i: int) -> dict[str, float]:
+        return dict(zip(self.effects[i].param_names, map(float, self.values[i])))
+
+    def params_ci(self, i: int) -> dict[str, list[float]]:
+        return {n: [float(a), float(b)] for n, a, b in zip(self.effects[i].param_names, self.ci_low[i], self.ci_high[i])}
+
+
+def _split(vec, effects):
+    out, k = [], 0
+    for e in effects:
+        out.append(vec[k:k + len(e.params)])
+        k += len(e.params)
+    return out
+
+
+def weighted_residual(model, readings, effects, values, mask=None) -> np.ndarray:
+    d = predict_readings(model, readings, effects, values)
+    r = (d - readings.disp) / readings.sigma
+    return (r if mask is None else r[mask]).ravel()
+
+
+def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: int = 400) -> FitResult:
+    """Fit the parameters of ``effects`` (sequence of Effect) to the states in ``mask`` (bool (m,); all if None).
+
+    ``starts``: list of full start vectors (natural units, concatenated over effects); default: the
+    product of each effect's ``starts`` (first entries) plus each alternative of each effect.
+    """
+    effects = tuple(effects)
+    params = [p for e in effects for p in e.params]
+    mask = np.ones(len(readings.phase), bool) if mask is None else np.asarray(mask, bool)
+    n_data = int(mask.sum()) * 3
+    if not params:
+        pred = predict_readings(model, readings, effects, [np.zeros(0)] * len(effects))
+        chi2 = float(np.sum(((pred - readings.disp) / readings.sigma)[mask] ** 2))
+        return FitResult(effects, tuple(np.zeros(0) for _ in effects), tuple(np.zeros(0) for _ in effects),
+                         tuple(np.zeros(0) for _ in effects), chi2, n_data, 0, (), pred)
+    lo = np.array([p.to_x(p.lower) if not (p.log and p.lower <= 0) else -np.inf for p in params], float)
+    hi = np.array([p.to_x(p.upper) for p in params], float)
+    if starts is None:
+        base = [e.starts(model)[0] for e in effects]
+        starts = [np.concatenate(base)]
+        for i, e in enumerate(effects):
+            for alt in e.starts(model)[1:]:
+                s = list(base)
+                s[i] = alt
+                starts.append(np.concatenate(s))
+    to_x = lambda v: np.array([p.to_x(x) for p, x in zip(params, v)], float)
+    from_x = lambda x: np.array([p.from_x(xi) for p, xi in zip(params, x)], float)
+
+    def fun(x):
+        return weighted_residual(model, readings, effects, _split(from_x(x), effects), mask)
+
+    best, nfev = None, 0
+    for s in starts:
+        x0 = np.clip(to_x(s), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        sol = least_squares(fun, x0, bounds=(lo, hi), method="trf", x_scale=1.0, diff_step=1e-6, max_nfev=max_nfev)
+        nfev += sol.nfev
+        if best is None or sol.cost < best.cost:
+            best = sol
+    x, J = best.x, best.jac
+    chi2 = 2.0 * float(best.cost)
+    k = len(params)
+    s2 = max(1.0, chi2 / max(n_data - k, 1))
+    JTJ = J.T @ J
+    warnings = []
+    free = np.asarray(best.active_mask) == 0       # parameters on a bound are reported as such, not as unidentified
+    try:
+        cov = s2 * np.linalg.pinv(JTJ)
+        sub = JTJ[np.ix_(free, free)]
+        ev = np.linalg.eigvalsh(sub) if free.any() else np.ones(1)
+        singular = ev.min() <= 1e-10 * max(ev.max(), 1e-300)
+        cov_free = np.full((k, k), np.nan)
+        if free.any():
+            cov_free[np.ix_(free, free)] = s2 * np.linalg.pinv(sub)
+    except np.linalg.LinAlgError:
+        singular, cov, cov_free = True, np.full((k, k), np.nan), np.full((k, k), np.nan)
+    sd = np.sqrt(np.clip(np.nan_to_num(np.diag(cov)), 0.0, None))
+    lo_x, hi_x = np.clip(x - _Z95 * sd, lo, hi), np.clip(x + _Z95 * sd, lo, hi)
+    vals, cil, cih = from_x(x), from_x(lo_x), from_x(hi_x)
+    names = [f"{e.id}.{p.name}" for e in effects for p in e.params]
+    if singular:
+        warnings.append("J^T J is numerically singular: some parameter combinations are not determined by the data")
+    sd_free = np.sqrt(np.clip(np.nan_to_num(np.diag(cov_free)), 0.0, None))
+    for j, p in enumerate(params):
+        if not free[j]:
+            continue
+        wide = (sd_free[j] > 1.0) if p.log else (_Z95 * sd_free[j] * p.typical > max(abs(vals[j]), 1e-300))
+        if wide:
+            warnings.append(f"{names[j]} = {vals[j]:.4g} is not identifiable from these data "
+                            f"(95 % interval [{cil[j]:.3g}, {cih[j]:.3g}])")
+    fi = np.flatnonzero(free & (sd_free > 0))
+    for ia, a in enumerate(fi):
+        for b in fi[ia + 1:]:
+            c = cov_free[a, b] / (sd_free[a] * sd_free[b])
+            if abs(c) > _CORR_LIMIT:
+                warnings.append(f"{names[a]} and {names[b]} are nearly collinear (corr {c:+.3f}): the data "
+                                f"pin down a combination, not each")
+    pred = predict_readings(model, readings, effects, _split(vals, effects))
+    for w in warnings:
+        log.info("fit %s: %s", "+".join(e.id for e in effects), w)
+    return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
+                     chi2, n_data, k, tuple(warnings), pred, nfev)

@@ -1,0 +1,194 @@
+"""Model selection that does not fool itself (issue 7 item 6).
+
+Greedy forward selection over the effect library, at most ``max_effects`` (2) effects:
+
+1. every applicable effect not yet in the model is fitted jointly with the effects already chosen
+   (:func:`femcheck.diagnose.fitting.fit_effects`) and ranked by the Bayesian information criterion
+   BIC = chi^2 + k ln N (Schwarz 1978); only candidates improving BIC by more than ``bic_margin`` (10,
+   "very strong" evidence on Kass & Raftery's scale) go on;
+2. the ``shortlist`` best are cross-validated by leaving test points out (``n_folds`` folds of points;
+   sweep readings belong to P0): fitted without the held-out points, they predict the held-out readings;
+3. the candidate with the lowest held-out chi^2 is accepted only if it lowers the held-out chi^2 of the
+   current model by more than measurement noise explains, ``2 sqrt(2 N_heldout)`` (twice the standard
+   deviation of a chi^2 with N_heldout degrees of freedom). A single step need not lower the relative
+   deflection error (friction alone, for instance, fits the preload and unload readings but not eq. 1's
+   deflection when a stiffness error hides beside it);
+4. the final model must lower the held-out mean relative error of the deflection below the model as given.
+
+If no effect is accepted in the first round, or step 4 fails, the answer is ``none``. The held-out errors reported are
+those of the cross-validation: ``heldout_error_before`` of the model as given (no parameters fitted, so
+its held-out and in-sample errors coincide), ``heldout_error_after`` of the selected extension.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+
+from femcheck.diagnose import residuals
+from femcheck.diagnose.effects import effects as effect_registry
+from femcheck.diagnose.fitting import FitResult, fit_effects
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class CrossValidation:
+    """Held-out predictions: ``delta`` (c, 3) m eq. 1 deflections, ``states`` (m, 3) readings, ``chi2`` over all
+    held-out states, ``error`` / ``error_along`` {axis: mean relative error, 'overall'}."""
+
+    delta: np.ndarray
+    states: np.ndarray
+    chi2: float
+    error: dict
+    error_along: dict
+
+
+@dataclasses.dataclass(frozen=True)
+class Cause:
+    id: str
+    location: str
+    params: dict
+    params_ci: dict
+
+    def as_dict(self) -> dict:
+        return {"id": self.id, "location": self.location, "params": self.params, "params_ci": self.params_ci}
+
+
+@dataclasses.dataclass(frozen=True)
+class Diagnosis:
+    """Result of :func:`diagnose` (see module docstring). ``steps``: per round, the candidates with their BIC,
+    held-out chi^2 / error and whether accepted; ``baseline``: seed 001 weight fit held-out errors."""
+
+    model_name: str
+    causes: tuple[Cause, ...]
+    significant: bool
+    base: FitResult
+    fit: FitResult
+    cv_before: CrossValidation
+    cv_after: CrossValidation
+    steps: tuple[dict, ...]
+    folds: tuple[tuple[str, ...], ...]
+    warnings: tuple[str, ...]
+    noise_threshold: float
+    baseline_error: dict | None = None
+    readings: object = dataclasses.field(default=None, repr=False)
+
+    @property
+    def heldout_error_before(self) -> dict:
+        return self.cv_before.error
+
+    @property
+    def heldout_error_after(self) -> dict:
+        return self.cv_after.error
+
+    def _by_direction(self, cv) -> dict:
+        return residuals.mean_by_direction(self.readings, residuals.case_errors(self.readings, cv.delta)["vector"])
+
+    def as_json(self) -> dict:
+        return {"model": self.model_name,
+                "causes": [c.as_dict() for c in self.causes],
+                "heldout_error_before": self.cv_before.error, "heldout_error_after": self.cv_after.error,
+                "heldout_error_along_load_before": self.cv_before.error_along,
+                "heldout_error_along_load_after": self.cv_after.error_along,
+                "heldout_error_by_direction_before": self._by_direction(self.cv_before),
+                "heldout_error_by_direction_after": self._by_direction(self.cv_after),
+                "significant": self.significant,
+                "heldout_chi2_before": self.cv_before.chi2, "heldout_chi2_after": self.cv_after.chi2,
+                "noise_threshold_chi2": self.noise_threshold,
+                "baseline_weight_fit_heldout_error": self.baseline_error,
+                "folds": [list(f) for f in self.folds], "warnings": list(self.warnings),
+                "steps": list(self.steps)}
+
+
+def point_folds(readings, n_folds: int = 3) -> tuple[tuple[str, ...], ...]:
+    """Leave-points-out folds: the points (sorted by label) dealt round-robin into ``n_folds`` groups."""
+    pts = sorted(readings.points, key=lambda p: (len(p), p))
+    n = max(2, min(n_folds, len(pts)))
+    return tuple(tuple(pts[j::n]) for j in range(n))
+
+
+def cross_validate(model, readings, effects, full: FitResult, folds) -> CrossValidation:
+    """Fit without each fold's points (warm start at the full fit) and predict the held-out readings."""
+    states = full.predicted.copy()
+    if full.n_params:
+        start = [np.concatenate(full.values)]
+        for fold in folds:
+            test = np.isin(readings.point, fold)
+            f = fit_effects(model, readings, effects, mask=~test, starts=start, max_nfev=100)
+            states[test] = f.predicted[test]
+    chi2 = float(np.sum(((states - readings.disp) / readings.sigma) ** 2))
+    delta = residuals.case_deltas(readings, states)
+    err = residuals.case_errors(readings, delta)
+    return CrossValidation(delta=delta, states=states, chi2=chi2, error=residuals.mean_by_axis(readings, err["vector"]),
+                           error_along=residuals.mean_by_axis(readings, err["along"]))
+
+
+def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
+             bic_margin: float = 10.0, with_baseline: bool = True) -> Diagnosis:
+    """Name the effects that explain ``readings`` beyond ``model`` (see module docstring)."""
+    if readings.n_cases == 0 or len(set(readings.case_point)) < 2:
+        from femcheck.errors import MeasuredDataError
+        raise MeasuredDataError(readings.source, None, "point", "a diagnosis needs preload and total readings at two or "
+                                "more points (leave-points-out cross-validation)")
+    reg = effect_registry()
+    pool = [reg[c] for c in (candidates or sorted(reg)) if c != "none" and reg[c].applicable(model)]
+    folds = point_folds(readings, n_folds)
+    base = fit_effects(model, readings, [])
+    cv_base = cross_validate(model, readings, [], base, folds)
+    n_total = 3 * readings.n_states
+    threshold = 2.0 * np.sqrt(2.0 * n_total)
+    chosen, cur_fit, cur_cv = [], base, cv_base
+    steps = []
+    for rnd in range(max_effects):
+        fits = []
+        for eff in pool:
+            if eff in chosen:
+                continue
+            starts = None
+            if chosen:
+                prev = np.concatenate(cur_fit.values)
+                starts = [np.concatenate([prev, s]) for s in eff.starts(model)]
+            fits.append(fit_effects(model, readings, chosen + [eff], starts=starts))
+        fits.sort(key=lambda f: f.bic)
+        rows = [{"round": rnd + 1, "effects": list(f.ids), "chi2": f.chi2, "bic": f.bic, "delta_bic": cur_fit.bic - f.bic}
+                for f in fits]
+        short = [f for f in fits[:shortlist] if cur_fit.bic - f.bic > bic_margin]
+        best, best_cv = None, None
+        for f in short:
+            cv = cross_validate(model, readings, list(f.effects), f, folds)
+            row = next(r for r in rows if r["effects"] == list(f.ids))
+            row.update(heldout_chi2=cv.chi2, heldout_error=cv.error["overall"])
+            if best_cv is None or cv.chi2 < best_cv.chi2:
+                best, best_cv = f, cv
+        accepted = best is not None and cur_cv.chi2 - best_cv.chi2 > threshold
+        for r in rows:
+            r["accepted"] = bool(accepted and r["effects"] == list(best.ids))
+        steps.extend(rows)
+        log.info("round %d: best %s (dBIC %.1f), held-out chi2 %.1f -> %s, accepted %s", rnd + 1,
+                 fits[0].ids if fits else "-", cur_fit.bic - fits[0].bic if fits else 0.0, cur_cv.chi2,
+                 f"{best_cv.chi2:.1f}" if best_cv else "-", accepted)
+        if not accepted:
+            break
+        chosen, cur_fit, cur_cv = list(best.effects), best, best_cv
+    if chosen and not cur_cv.error["overall"] < cv_base.error["overall"]:
+        log.info("selected %s lowers the held-out chi^2 but not the held-out relative error: answer none",
+                 "+".join(e.id for e in chosen))
+        chosen, cur_fit, cur_cv = [], base, cv_base
+    causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
+                         params=cur_fit.params(i), params_ci=cur_fit.params_ci(i)) for i, e in enumerate(chosen))
+    if not causes:
+        causes = (Cause(id="none", location="", params={}, params_ci={}),)
+    base_err = None
+    if with_baseline:
+        from femcheck.diagnose.baseline import baseline
+        try:
+            b = baseline(model, readings, folds)
+            base_err = residuals.mean_by_axis(readings, residuals.case_errors(readings, b.heldout_delta)["vector"])
+        except Exception as exc:  # the baseline is informative only; never fail a diagnosis on it
+            log.warning("seed 001 baseline failed: %s", exc)
+    return Diagnosis(model_name=model.name, causes=causes, significant=bool(chosen), base=base, fit=cur_fit,
+                     cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
+                     warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
+                     readings=readings)

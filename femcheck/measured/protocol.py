@@ -1,0 +1,234 @@
+"""The static stiffness test protocol of seed 000 (§3.1.3 steps 3-6, §4.3.2) applied to measured readings.
+
+Per point, direction and trial the dials are zeroed unloaded, the preload P_p is applied and delta_p read,
+then the total P_p + P_T and delta_t read. The deflection due to the test load and the stiffness are
+(seed 000 eq. 1)::
+
+    delta = delta_t - delta_p,        K = P_T / delta        (along the load direction)
+
+averaged over the trials. ``unload`` readings (back to P_p, then to 0) reveal hysteresis; an optional
+``sweep`` staircase (5..30 N at P0) identifies the preload (:func:`identify_preload`, seed 000 Fig. 8).
+
+Uncertainty: a reading is the true displacement plus noise, quantized to the dial resolution r. The
+reading noise is estimated by pooling the trial scatter of all reading states and adding the
+quantization variance r^2/12 (conservative: the scatter of quantized readings already contains part of
+it); a state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two readings)
+sqrt(2) sigma_r / sqrt(n).
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+
+from femcheck.errors import MeasuredDataError
+from femcheck.measured.csv_format import AXIS_DIRECTIONS, MeasuredData
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class Readings:
+    """Trial-averaged reading states and the per-case deflections of eq. 1 (SI).
+
+    States (m): one per distinct (point, direction, phase, load): ``pose`` (m, 6) m/rad, ``force`` (m, 3) N,
+    ``load_N`` (m,), ``phase`` (m,) str, ``peak_N`` (m,) highest load of the loading sequence before the
+    state (unload states; = load otherwise), ``disp`` (m, 3) m mean reading, ``sigma`` (m, 3) m standard
+    uncertainty of the mean, ``n_trials`` (m,), ``point``, ``direction`` (m,) str, ``case_index`` (m,) index of the case
+    (-1 for sweep states of a direction without a preload/total test).
+    Cases (c): one per (point, direction) with preload and total readings: ``case_point``, ``case_direction``
+    (c,) str, ``case_unit`` (c, 3) load direction, ``case_pose`` (c, 6), ``preload_N``, ``test_N`` (c,) (P_p, P_T),
+    ``delta`` (c, 3) m eq. 1 deflection averaged over trials, ``delta_sigma`` (c, 3) m, ``preload_state``,
+    ``total_state`` (c,) state indices.
+    """
+
+    source: str
+    pose: np.ndarray
+    force: np.ndarray
+    load_N: np.ndarray
+    phase: np.ndarray
+    peak_N: np.ndarray
+    disp: np.ndarray
+    sigma: np.ndarray
+    n_trials: np.ndarray
+    point: np.ndarray
+    direction: np.ndarray
+    case_index: np.ndarray
+    case_point: np.ndarray
+    case_direction: np.ndarray
+    case_unit: np.ndarray
+    case_pose: np.ndarray
+    preload_N: np.ndarray
+    test_N: np.ndarray
+    delta: np.ndarray
+    delta_sigma: np.ndarray
+    preload_state: np.ndarray
+    total_state: np.ndarray
+    reading_sigma_m: float
+    resolution_m: float
+
+    @property
+    def n_states(self) -> int:
+        return len(self.phase)
+
+    @property
+    def n_cases(self) -> int:
+        return len(self.case_point)
+
+    @property
+    def points(self) -> list[str]:
+        """Distinct points in first-seen order."""
+        return list(dict.fromkeys(self.point.tolist()))
+
+    def case_axis(self) -> np.ndarray:
+        """(c,) the load-direction label without sign ('x', 'y', 'z' or the named load case)."""
+        return np.array([d.lstrip("+-") if d in AXIS_DIRECTIONS else d for d in self.case_direction], dtype=object)
+
+    def stiffness(self) -> np.ndarray:
+        """(c,) K = P_T / delta along the load direction, N/m (seed 000 eq. 1)."""
+        return self.test_N / np.einsum("ij,ij->i", self.delta, self.case_unit)
+
+
+def resolve_poses(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None = None) -> np.ndarray:
+    """(r, 6) pose of every row: P0..P8 from the case's test points, other ids from ``pose_table``."""
+    from femcheck.kinematics.psu6 import POINT_LABELS, test_points
+    table = {lab: p for lab, p in zip(POINT_LABELS, test_points(case))}
+    table.update(pose_table or {})
+    out = np.empty((len(data), 6))
+    for i, p in enumerate(data.point):
+        if p not in table:
+            raise data.error(i, "point", f"{p!r} is not P0..P8 and not a pose id of the case "
+                             f"(known: {', '.join(sorted(table))})")
+        out[i] = table[p]
+    return out
+
+
+def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None = None) -> Readings:
+    """Average trials, apply eq. 1 per trial and estimate uncertainties (see module docstring)."""
+    poses = resolve_poses(data, case, pose_table)
+    res = float(case.measurement.dial_resolution_m)
+    load_key = np.round(data.load_N, 6)
+    # distinct states, in file order
+    keys = list(zip(data.point, data.direction, data.phase, load_key))
+    state_of: dict[tuple, int] = {}
+    idx = np.empty(len(data), dtype=int)
+    for r, k in enumerate(keys):
+        idx[r] = state_of.setdefault(k, len(state_of))
+    m = len(state_of)
+    first = np.array([np.flatnonzero(idx == s)[0] for s in range(m)])
+    counts = np.bincount(idx, minlength=m)
+    mean = np.zeros((m, 3))
+    np.add.at(mean, idx, data.disp)
+    mean /= counts[:, None]
+    dev2 = np.zeros((m, 3))
+    np.add.at(dev2, idx, (data.disp - mean[idx]) ** 2)
+    multi = counts > 1
+    if multi.any():
+        pooled = dev2[multi].sum() / (3 * (counts[multi] - 1).sum())   # pooled variance of one reading
+    else:
+        pooled = 0.0
+    sigma_r = float(np.sqrt(pooled + res ** 2 / 12.0))
+    if sigma_r == 0.0:
+        raise MeasuredDataError(data.source, None, None, "cannot estimate the reading uncertainty: a single trial and "
+                                "zero dial resolution")
+
+    # cases: (point, direction) with preload and total readings; eq. 1 per trial
+    case_keys = list(dict.fromkeys(zip(data.point, data.direction)))
+    c_point, c_dir, c_unit, c_pose, c_pp, c_pt, c_delta, c_dsig, c_ps, c_ts = ([] for _ in range(10))
+    state_case = np.full(m, -1)
+    peak = np.abs(data.load_N[first]).astype(float)
+    for (p, d) in case_keys:
+        rows = np.flatnonzero((data.point == p) & (data.direction == d))
+        ph = data.phase[rows]
+        pre, tot = rows[ph == "preload"], rows[ph == "total"]
+        if len(pre) == 0 and len(tot) == 0:
+            continue  # a sweep-only direction (preload identification)
+        if len(pre) == 0 or len(tot) == 0:
+            r = rows[0]
+            raise data.error(r, "phase", f"point {p}, direction {d}: has {'total' if len(tot) else 'preload'} but no "
+                             f"{'preload' if len(tot) else 'total'} reading (eq. 1 needs both per trial)")
+        for group, name in ((pre, "preload"), (tot, "total")):
+            if len(set(np.round(data.load_N[group], 6))) != 1:
+                raise data.error(group[1], "load_N", f"point {p}, direction {d}: {name} load differs between trials")
+        tp, tt = data.trial[pre], data.trial[tot]
+        if sorted(tp) != sorted(tt):
+            missing = sorted(set(tp) ^ set(tt))[0]
+            raise data.error(rows[0], "trial", f"point {p}, direction {d}: trial {missing} lacks its preload or total reading")
+        order_p, order_t = pre[np.argsort(tp)], tot[np.argsort(tt)]
+        per_trial = data.disp[order_t] - data.disp[order_p]          # eq. 1, per trial
+        u = data.force[order_t[0]] / max(np.linalg.norm(data.force[order_t[0]]), 1e-300)
+        ci = len(c_point)
+        c_point.append(p); c_dir.append(d); c_unit.append(u); c_pose.append(poses[order_t[0]])
+        c_pp.append(abs(data.load_N[order_p[0]])); c_pt.append(abs(data.load_N[order_t[0]]) - abs(data.load_N[order_p[0]]))
+        c_delta.append(per_trial.mean(0))
+        c_dsig.append(np.full(3, np.sqrt(2.0) * sigma_r / np.sqrt(len(per_trial))))
+        c_ps.append(idx[order_p[0]]); c_ts.append(idx[order_t[0]])
+        sts = np.unique(idx[rows])
+        state_case[sts] = ci
+        unl = sts[data.phase[first[sts]] == "unload"]
+        peak[unl] = abs(data.load_N[order_t[0]])
+    if not c_point and not np.any(data.phase == "sweep"):
+        raise MeasuredDataError(data.source, None, "phase", "no (point, direction) has both preload and total readings")
+    log.debug("%s: %d states, %d cases, reading sigma %.3g m", data.source, m, len(c_point), sigma_r)
+    return Readings(
+        source=data.source, pose=poses[first], force=data.force[first], load_N=data.load_N[first],
+        phase=data.phase[first], peak_N=peak, disp=mean, sigma=np.repeat((sigma_r / np.sqrt(counts))[:, None], 3, 1),
+        n_trials=counts, point=data.point[first], direction=data.direction[first], case_index=state_case,
+        case_point=np.array(c_point, dtype=object), case_direction=np.array(c_dir, dtype=object),
+        case_unit=np.array(c_unit).reshape(-1, 3), case_pose=np.array(c_pose).reshape(-1, 6), preload_N=np.array(c_pp, float),
+        test_N=np.array(c_pt, float), delta=np.array(c_delta).reshape(-1, 3), delta_sigma=np.array(c_dsig).reshape(-1, 3),
+        preload_state=np.array(c_ps, int), total_state=np.array(c_ts, int),
+        reading_sigma_m=sigma_r, resolution_m=res)
+
+
+@dataclasses.dataclass(frozen=True)
+class PreloadIdentification:
+    """Result of :func:`identify_preload` for one direction: ``loads_N`` (k,) staircase levels, ``delta_m`` (k,)
+    mean readings along the load, ``spread`` (k,) coefficient of variation of the incremental stiffnesses
+    above each candidate, ``preload_N`` the identified preload (NaN if none qualifies) and ``stiffness_N_per_m``
+    the mean (F_k - P_p)/(delta_k - delta_p) above it."""
+
+    direction: str
+    loads_N: np.ndarray
+    delta_m: np.ndarray
+    spread: np.ndarray
+    preload_N: float
+    stiffness_N_per_m: float
+
+
+def identify_preload(readings: Readings, direction: str, tolerance: float | None = None) -> PreloadIdentification:
+    """Smallest staircase load P_p above which the ratios (F_k - P_p) / (delta_k - delta_p) are constant
+    (seed 000 §4.3.2, Fig. 8: "the smallest value that makes the ratios F/delta constant").
+
+    Uses the ``sweep`` states of ``direction``. "Constant" means: the coefficient of variation of the
+    ratios above the candidate is below ``tolerance`` (default: 3 x the relative reading uncertainty of the
+    smallest increment, at least 2 %), and at least two increments remain.
+    """
+    sel = np.flatnonzero((readings.phase == "sweep") & (np.array([readings.case_direction[c] if c >= 0 else None
+                                                                   for c in readings.case_index], dtype=object) == direction))
+    if sel.size == 0:  # sweep-only direction: the states carry no case; match by force direction
+        u = np.asarray(AXIS_DIRECTIONS.get(direction, (np.nan,) * 3), float)
+        fu = readings.force / np.maximum(np.linalg.norm(readings.force, axis=1, keepdims=True), 1e-300)
+        sel = np.flatnonzero((readings.phase == "sweep") & np.all(np.isclose(fu, u), axis=1))
+    if sel.size < 3:
+        raise MeasuredDataError(readings.source, None, "phase", f"direction {direction}: preload identification needs a "
+                                f"'sweep' staircase of at least 3 load levels, found {sel.size}")
+    sel = sel[np.argsort(np.abs(readings.load_N[sel]))]
+    F = np.abs(readings.load_N[sel])
+    u = readings.force[sel[-1]] / np.linalg.norm(readings.force[sel[-1]])
+    d = readings.disp[sel] @ u
+    spread = np.full(len(F), np.nan)
+    ratio_mean = np.full(len(F), np.nan)
+    for j in range(len(F) - 2):
+        r = (F[j + 1:] - F[j]) / (d[j + 1:] - d[j])
+        spread[j] = np.std(r) / abs(np.mean(r))
+        ratio_mean[j] = np.mean(r)
+    if tolerance is None:
+        step = np.min(np.abs(np.diff(d))) if len(d) > 1 else np.inf
+        tolerance = max(0.02, 3.0 * np.sqrt(2.0) * readings.sigma[sel].max() / max(step, 1e-300))
+    ok = np.flatnonzero(spread <= tolerance)
+    j = ok[0] if ok.size else None
+    return PreloadIdentification(direction=direction, loads_N=F, delta_m=d, spread=spread,
+                                 preload_N=float(F[j]) if j is not None else float("nan"),
+                                 stiffness_N_per_m=float(ratio_mean[j]) if j is not None else float("nan"))

@@ -1,0 +1,53 @@
+"""``femcheck diagnose`` end to end: JSON fields, report files, input untouched, bad input -> exit 2."""
+import hashlib
+import json
+
+import pytest
+
+from femcheck.cli import main
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    d = tmp_path_factory.mktemp("diag")
+    csv = d / "m.csv"
+    assert main(["experiment", "simulate", "cases/haptic_6psu.toml", "--effect", "actuation_compliance:scale=2.5",
+                 "--seed", "2", "--directions", "+x,+y,+z", "--out", str(csv), "--truth", str(d / "t.json")]) == 0
+    return d, csv
+
+
+def test_diagnose_json_and_report(data, capsys):
+    d, csv = data
+    digest = hashlib.sha256(csv.read_bytes()).hexdigest()
+    out, rep = d / "out.json", d / "report"
+    assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--model", "detailed", "--json", str(out),
+                 "--report", str(rep)]) == 0
+    j = json.loads(out.read_text())
+    assert [c["id"] for c in j["causes"]] == ["actuation_compliance"] and j["significant"] is True
+    c = j["causes"][0]
+    assert set(c) == {"id", "location", "params", "params_ci"}
+    assert c["params_ci"]["scale"][0] < 2.5 < c["params_ci"]["scale"][1]
+    for key in ("heldout_error_before", "heldout_error_after"):
+        assert set(j[key]) == {"x", "y", "z", "overall"}
+    assert set(j["heldout_error_by_direction_before"]) == {"+x", "+y", "+z"}
+    assert j["heldout_error_after"]["overall"] < 0.5 * j["heldout_error_before"]["overall"]
+    html = (rep / "report.html").read_text()
+    assert "data:image/png;base64," in html and "<img" in html and 'src="residual_map.png"' not in html
+    md = (rep / "report.md").read_text()
+    assert "| Rel. error % | P0 |" in md and (rep / "residual_map.png").stat().st_size > 1000
+    assert hashlib.sha256(csv.read_bytes()).hexdigest() == digest     # input never modified
+    assert "actuation_compliance" in capsys.readouterr().out
+
+
+def test_diagnose_bad_csv_names_row_and_column(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("point,direction,trial,phase,load_N,fx_N,fy_N,fz_N,dx_mm,dy_mm,dz_mm\nP0,+x,1,preload,5,5,0,0,x,0,0\n")
+    assert main(["diagnose", "cases/haptic_6psu.toml", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "row 2" in err and "dx_mm" in err
+
+
+def test_diagnose_refuses_to_write_over_its_input(data, capsys):
+    _, csv = data
+    assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--json", str(csv)]) == 2
+    assert "input file" in capsys.readouterr().err

@@ -1,0 +1,74 @@
+"""Protocol processing (seed 000 eq. 1, §4.3.2 preload identification, uncertainty) on hand-made rows."""
+import numpy as np
+import pytest
+
+import femcheck
+from femcheck.errors import MeasuredDataError
+from femcheck.measured import identify_preload, process
+from femcheck.measured.csv_format import parse_measured_csv
+
+HEADER = "point,direction,trial,phase,load_N,fx_N,fy_N,fz_N,dx_mm,dy_mm,dz_mm\n"
+
+
+@pytest.fixture(scope="module")
+def case():
+    return femcheck.load_case("cases/haptic_6psu.toml")
+
+
+def test_eq1_delta_and_stiffness_on_hand_made_rows(case):
+    rows = ("P0,+x,1,preload,5,5,0,0,0.09,0.01,0\nP0,+x,1,total,20,20,0,0,0.36,0.02,0\n"
+            "P0,+x,2,preload,5,5,0,0,0.10,0.00,0\nP0,+x,2,total,20,20,0,0,0.35,0.01,0\n"
+            "P0,+x,1,unload,5,5,0,0,0.11,0,0\nP0,+x,1,unload,0,0,0,0,0.01,0,0\n")
+    r = process(parse_measured_csv(HEADER + rows), case)
+    # eq. 1 per trial: (0.36 - 0.09) and (0.35 - 0.10) mm, averaged -> 0.26 mm; K = 15 N / 0.26 mm
+    np.testing.assert_allclose(r.delta[0], [0.26e-3, 0.01e-3, 0.0], rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(r.stiffness(), [15.0 / 0.26e-3], rtol=1e-12)   # float rounding only
+    assert (r.preload_N[0], r.test_N[0]) == (5.0, 15.0)
+    # unload states remember the peak of their loading sequence (20 N), for the friction model
+    assert set(r.peak_N[r.phase == "unload"]) == {20.0}
+
+
+def test_uncertainty_pools_trial_scatter_and_resolution(case):
+    rows = ("P0,+x,1,preload,5,5,0,0,0.09,0,0\nP0,+x,1,total,20,20,0,0,0.36,0,0\n"
+            "P0,+x,2,preload,5,5,0,0,0.11,0,0\nP0,+x,2,total,20,20,0,0,0.36,0,0\n")
+    r = process(parse_measured_csv(HEADER + rows), case)
+    res = case.measurement.dial_resolution_m
+    # pooled variance: only dx of the preload state scatters (0.09, 0.11 mm): s^2 = 2e-10 m^2 over 6 dof
+    pooled = 2e-10 / 6
+    assert r.reading_sigma_m == pytest.approx(np.sqrt(pooled + res ** 2 / 12), rel=1e-9)   # float rounding
+    np.testing.assert_allclose(r.delta_sigma[0], np.sqrt(2) * r.reading_sigma_m / np.sqrt(2), rtol=1e-12)
+
+
+def test_missing_total_names_row_and_column(case):
+    with pytest.raises(MeasuredDataError) as ei:
+        process(parse_measured_csv(HEADER + "P0,+x,1,preload,5,5,0,0,0.09,0,0\n", "m.csv"), case)
+    assert ei.value.column == "phase" and ei.value.row == 2 and "no total" in str(ei.value)
+
+
+def test_unknown_pose_id_names_the_row(case):
+    with pytest.raises(MeasuredDataError) as ei:
+        process(parse_measured_csv(HEADER + "Q7,+x,1,preload,5,5,0,0,0.09,0,0\n", "m.csv"), case)
+    assert (ei.value.row, ei.value.column) == (2, "point") and "P0..P8" in str(ei.value)
+
+
+def test_preload_identification_finds_where_the_dead_band_is_closed(case):
+    # staircase 5..30 N with a dead band g closed by the load: delta = g (1 - exp(-F/Fc)) + F / k
+    k, g, Fc = 60e3, 40e-6, 2.0
+    F = np.arange(5.0, 31.0, 5.0)
+    d = g * (1 - np.exp(-F / Fc)) + F / k
+    rows = "".join(f"P0,+x,{t},sweep,{f:g},{f:g},0,0,{v * 1e3:.9f},0,0\n" for t in (1, 2) for f, v in zip(F, d))
+    r = process(parse_measured_csv(HEADER + rows), case.with_params(**{"measurement.dial_resolution_m": 1e-9}))
+    tol = 0.005
+    pid = identify_preload(r, "+x", tolerance=tol)
+    # brute force of the definition: smallest level above which the incremental ratios vary < tol
+    expect = next(F[j] for j in range(len(F) - 2)
+                  if np.std(r_ := (F[j + 1:] - F[j]) / (d[j + 1:] - d[j])) / np.mean(r_) <= tol)
+    assert pid.preload_N == expect and expect > 5.0
+    # above the identified preload the residual dead band changes the slope by < tol
+    assert pid.stiffness_N_per_m == pytest.approx(k, rel=tol)
+
+
+def test_preload_identification_needs_a_staircase(case):
+    r = process(parse_measured_csv(HEADER + "P0,+x,1,preload,5,5,0,0,0.09,0,0\nP0,+x,1,total,20,20,0,0,0.36,0,0\n"), case)
+    with pytest.raises(MeasuredDataError, match="sweep"):
+        identify_preload(r, "+x")
