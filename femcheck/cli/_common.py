@@ -1,10 +1,24 @@
 """Shared CLI parsing helpers (vectors on the command line, point selection)."""
 from __future__ import annotations
 
+from enum import Enum
+
 import numpy as np
 import typer
 
 from femcheck.kinematics.psu6 import POINT_LABELS, test_points
+
+
+class ModelLevel(str, Enum):
+    """Analytical model level (seed 000 §3.1 simplified, §3.2 detailed)."""
+    simplified = "simplified"
+    detailed = "detailed"
+
+
+class Joints(str, Enum):
+    """Joint idealization (CONVENTIONS.md §5)."""
+    rigid = "rigid"
+    released = "released"
 
 
 def parse_vector(text: str, n: int, name: str) -> np.ndarray:

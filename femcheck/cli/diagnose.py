@@ -3,7 +3,6 @@ and its held-out gain (issue 7; docs/diagnose.md)."""
 from __future__ import annotations
 
 import json
-from enum import Enum
 from pathlib import Path
 
 import typer
@@ -11,16 +10,7 @@ from rich.table import Table
 
 from femcheck.case import load_case
 from femcheck.cli import console
-
-
-class ModelLevel(str, Enum):
-    simplified = "simplified"
-    detailed = "detailed"
-
-
-class Joints(str, Enum):
-    rigid = "rigid"
-    released = "released"
+from femcheck.cli._common import Joints, ModelLevel
 
 
 def register(app: typer.Typer) -> None:

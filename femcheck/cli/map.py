@@ -7,7 +7,7 @@ import numpy as np
 import typer
 
 from femcheck.case import load_case
-from femcheck.cli.stiffness import Joints, ModelLevel
+from femcheck.cli._common import Joints, ModelLevel
 from femcheck.report.atomic import refuse_input_overwrite, write_bytes_atomic
 from femcheck.report.stiffness_map import plot_stiffness_map, stiffness_map
 

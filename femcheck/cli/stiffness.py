@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-from enum import Enum
 
 import numpy as np
 import typer
@@ -11,18 +10,8 @@ from rich.table import Table
 from femcheck.case import load_case
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.cli import console
-from femcheck.cli._common import parse_vector, select_pose
+from femcheck.cli._common import Joints, ModelLevel, parse_vector, select_pose
 from femcheck.kinematics.psu6 import condition_number, leg_geometry
-
-
-class ModelLevel(str, Enum):
-    simplified = "simplified"
-    detailed = "detailed"
-
-
-class Joints(str, Enum):
-    rigid = "rigid"
-    released = "released"
 
 
 def register(app: typer.Typer) -> None:

@@ -5,6 +5,8 @@ from enum import Enum
 
 import typer
 
+from femcheck.cli._common import Joints
+
 
 class Design(str, Enum):
     grid = "grid"
@@ -16,11 +18,6 @@ class SweepModel(str, Enum):
     simplified = "simplified"
     detailed = "detailed"
     fe = "fe"
-
-
-class Joints(str, Enum):
-    rigid = "rigid"
-    released = "released"
 
 
 def register(app: typer.Typer) -> None:

@@ -1,6 +1,8 @@
-"""``femcheck verify``: the main job — models across the test-point cube, tables, plots, drift check."""
+"""``femcheck verify``: the main job — analytical and FE models across the test-point cube, relative-error
+tables, plots, VTU, drift and threshold check."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import typer
@@ -8,25 +10,40 @@ import typer
 from femcheck.case import load_case
 from femcheck.kinematics.psu6 import POINT_LABELS
 
+LEVEL_CHOICES = {"simplified": ("simplified",), "detailed": ("detailed",), "both": ("simplified", "detailed"),
+                 "none": ()}
+
 
 def register(app: typer.Typer) -> None:
     @app.command("verify")
     def verify_cmd(
         case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML)"),
+        level: str = typer.Option("both", "--level", help="FE levels: simplified | detailed | both | none (analytical only)"),
         points: str = typer.Option(None, "--points", help="comma-separated subset of P0..P8 (default: all)"),
+        mesh: str = typer.Option("default", "--mesh", help="FE mesh: coarse | default | fine"),
+        jobs: int = typer.Option(min(os.cpu_count() or 1, 4), "--jobs", min=1, help="worker processes for the FE solves (default: CPUs, at most 4)"),
         out: Path = typer.Option(Path("reports/verify"), "--out", help="run folder for tables, plots, report.html, manifest.json"),
-        check: bool = typer.Option(False, "--check", help="compare with the committed baseline; exit 1 on drift"),
-        baseline: Path = typer.Option(Path("reports/baseline/analytical.json"), "--baseline", help="baseline file for --check"),
-        update_baseline: bool = typer.Option(False, "--update-baseline", help="write the current values as the baseline"),
+        check: bool = typer.Option(False, "--check", help="compare with the committed baselines and the error thresholds; exit 1 on failure"),
+        baseline: Path = typer.Option(Path("reports/baseline/analytical.json"), "--baseline", help="analytical baseline for --check"),
+        fe_baseline: Path = typer.Option(None, "--fe-baseline", help="FE baseline (default reports/baseline/fe_<mesh>.json)"),
+        update_baseline: bool = typer.Option(False, "--update-baseline", help="write the current values as the baseline(s)"),
+        vtu: bool = typer.Option(True, "--vtu/--no-vtu", help="write a VTU of the deformed FE models per point"),
+        convergence: str = typer.Option(None, "--convergence", help="mesh-convergence study (coarse/default/fine) at this point, "
+                                        "e.g. P0; default: P0 for a full default-mesh run, else none ('none' to skip)"),
     ):
-        """Verify the analytical models on the test cube and write relative-error tables (seed 000 Tables 2-3).
+        """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
-        Writes CSV/Markdown tables, deflection and contribution plots, a self-contained report.html and
-        manifest.json into --out. (The FE comparison, errors_simplified.csv / errors_detailed.csv,
-        is added by the FE verification.)
+        Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
+        rel_error), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
+        plots, VTU per point, report.html and manifest.json into --out.
         """
         from femcheck.cli import console
-        from femcheck.verify.run import error_rows, run_verify
+        from femcheck.fe_device.mesh_levels import MESH_LEVELS
+        from femcheck.verify.run import error_rows, error_table, fe_error_rows, run_verify
+        if level not in LEVEL_CHOICES:
+            raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
+        if mesh not in MESH_LEVELS:
+            raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
         case = load_case(case_path)
         pts = None
         if points:
@@ -34,25 +51,58 @@ def register(app: typer.Typer) -> None:
             bad = [p for p in pts if p not in POINT_LABELS]
             if bad:
                 raise typer.BadParameter(f"--points: {bad[0]!r}; expected P0..P8")
-        run = run_verify(case, out, pts, check=check, baseline_path=baseline if (check or update_baseline) else None,
-                         update_baseline=update_baseline, command="femcheck verify " + case_path)
+        levels = LEVEL_CHOICES[level]
+        if convergence is None:
+            convergence = "P0" if (levels and mesh == "default" and pts is None) else "none"
+        conv_point = None if convergence.lower() == "none" else convergence.upper()
+        if conv_point is not None and conv_point not in POINT_LABELS:
+            raise typer.BadParameter(f"--convergence: {convergence!r}; expected P0..P8 or none")
+        fe_base = fe_baseline or Path(f"reports/baseline/fe_{mesh}.json")
         con = console()
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+        reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")
+        n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0)
+        with Progress(TextColumn("FE solves"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      TextColumn("{task.description}"), console=con, disable=not levels) as bar:
+            task = bar.add_task("", total=n_solves)
+            run = run_verify(case, out, pts, check=check, baseline_path=baseline if (check or update_baseline) else None,
+                             update_baseline=update_baseline, command="femcheck verify " + case_path, levels=levels,
+                             mesh=mesh, jobs=jobs, progress=lambda desc: bar.update(task, advance=1, description=desc),
+                             fe_baseline_path=fe_base if (check or update_baseline) else None, vtu=vtu,
+                             convergence_point=conv_point)
         from rich.table import Table
-        for joints in ("rigid", "released"):
-            rows = error_rows(run.analytical, joints)
-            t = Table(title=f"simplified vs detailed analytical model, {joints} joints (relative error %)")
+
+        def show(title, rows):
+            t = Table(title=title)
             for c in rows[0]:
                 t.add_column(c, justify="right")
             for r in rows:
-                t.add_row(*[f"{v:.1f}" if isinstance(v, float) else str(v) for v in r.values()])
+                t.add_row(*[f"{v:.2f}" if isinstance(v, float) else str(v) for v in r.values()])
             con.print(t)
+        for joints in ("rigid", "released"):
+            show(f"simplified vs detailed analytical model, {joints} joints (relative error %)", error_rows(run.analytical, joints))
+        if run.fe is not None:
+            for lvl in run.fe.levels:
+                rows = fe_error_rows(run.analytical, run.fe, lvl)
+                for joints in ("rigid", "released"):
+                    show(f"{lvl} analytical vs {lvl} FE, {joints} joints (relative error %, mesh {mesh})",
+                         error_table(rows, joints, run.fe.directions))
+            ts = run.fe.timings_s
+            con.print(f"FE: meshing {ts['meshing']:.1f} s, assembly {ts['assembly']:.1f} s, solve {ts['solve']:.1f} s "
+                      f"(summed over solves), platform/loads {ts['platform']:.1f} s, wall {ts['wall']:.1f} s")
         con.print(f"wrote {len(run.files) + 1} files to {out} in {run.seconds:.2f} s (report: {out / 'report.html'})")
         if update_baseline:
-            con.print(f"baseline written: {baseline}")
+            con.print(f"baseline written: {baseline}" + (f", {fe_base}" if levels else ""))
         if check:
             if run.drift:
-                con.print(f"[red]drift against {baseline}:[/]")
+                con.print("[red]drift against the baseline:[/]")
                 for line in run.drift:
                     con.print("  " + line)
+            if run.failures:
+                con.print("[red]analytical-FE error above threshold:[/]")
+                for line in run.failures:
+                    con.print("  " + line)
+            if run.drift or run.failures:
                 raise typer.Exit(1)
-            con.print(f"[green]no drift against {baseline}[/]")
+            con.print(f"[green]no drift against {baseline}" + (f" and {fe_base}" if levels else "") +
+                      ("; errors within thresholds" if levels else "") + "[/]")
