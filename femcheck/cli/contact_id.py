@@ -107,6 +107,9 @@ def register(app: typer.Typer) -> None:
                 t.add_row(str(r.modes[i]), f"{r.frequencies_Hz[i]:.6g}", f"{ks[i] * 1e-6:.5g}", f"{r.sensitivity[i]:.4f}",
                           f"{r.df_dlnk_Hz[i]:.4g}", f"{r.sigma_ln_k[i]:.3g}", "*" if i == r.best else "")
             con.print(t)
+            if not r.consistent:
+                con.print(f"[yellow]warning: the modes disagree on {sym} by more than 3 sigma; "
+                          "check the mode numbering (--modes) or the model data[/yellow]")
         if report.law is not None:
             law = report.law
             con.print(f"preload law {sym} = c P^m: c = {law.c:.4g} N/m/N^m, m = {law.m:.4f} "
