@@ -10,7 +10,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
-from femcheck.case.schema import Context, Material, build_materials, build_section, option, quantity
+from femcheck.case.schema import CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "contact_specimen"
 
@@ -98,7 +98,7 @@ class Identification:
 
 
 @dataclass(frozen=True)
-class ContactSpecimenCase:
+class ContactSpecimenCase(CaseVariants):
     """A validated contact-identification case. Immutable; variants via :meth:`with_params`."""
 
     meta: Meta
@@ -113,10 +113,6 @@ class ContactSpecimenCase:
 
     kind = CASE_KIND
 
-    def with_params(self, **dotted) -> "ContactSpecimenCase":
-        """A re-validated variant, e.g. ``case.with_params(**{"fe.element": "hex1"})``."""
-        from femcheck.case.registry import with_params
-        return with_params(self, dotted)
 
 
 SECTIONS = {"meta": Meta, "bar": BarSection, "specimen": SpecimenSection, "fe": FEOptions,
@@ -128,14 +124,5 @@ def build(raw: dict, path) -> ContactSpecimenCase:
     """Validate a parsed TOML document into a :class:`ContactSpecimenCase` (errors name file and key)."""
     ctx = Context(path)
     ctx.materials = build_materials(ctx, raw.get("materials"))
-    allowed = set(SECTIONS) | {"materials"}
-    unknown = sorted(set(raw) - allowed)
-    if unknown:
-        raise ctx.error(unknown[0], f"unknown section; expected one of {sorted(allowed)}")
-    parts = {}
-    for name, cls in SECTIONS.items():
-        table = raw.get(name, {} if name in OPTIONAL_SECTIONS else None)
-        if table is None:
-            raise ctx.error(name, f"required section [{name}] is missing")
-        parts[name] = build_section(ctx, name, cls, table)
+    parts = build_sections(ctx, raw, SECTIONS, OPTIONAL_SECTIONS, also_allowed=("materials",))
     return ContactSpecimenCase(materials=tuple(ctx.materials.values()), **parts)
