@@ -62,7 +62,7 @@ def test_map_refuses_to_overwrite_the_case(tmp_path):
 
 def test_verify_check_against_committed_baseline(tmp_path):
     """CI regression: the analytical deflections must not drift from reports/baseline/analytical.json."""
-    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--out", str(tmp_path), "--check",
+    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--level", "none", "--out", str(tmp_path), "--check",
                                     "--baseline", str(ROOT / "reports/baseline/analytical.json")])
     assert res.exit_code == 0, res.output
     assert "no drift" in res.output
@@ -78,7 +78,7 @@ def test_verify_check_detects_drift(tmp_path):
     base[key] *= 1.01
     drifted = tmp_path / "base.json"
     drifted.write_text(json.dumps(base))
-    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--points", "P0", "--out", str(tmp_path / "run"),
+    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--level", "none", "--points", "P0", "--out", str(tmp_path / "run"),
                                     "--check", "--baseline", str(drifted)])
     assert res.exit_code == 1
     assert key in res.output and "drift" in res.output

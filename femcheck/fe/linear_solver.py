@@ -1,0 +1,173 @@
+"""Sparse linear solvers for the FE equations K u = f, chosen automatically by size and availability.
+
+Three paths (issue 5 item 6):
+
+* ``"pardiso"`` — Intel MKL PARDISO through :mod:`pypardiso` (direct, multithreaded). Symmetric matrices are
+  factorized as real symmetric indefinite (``mtype=-2``, Bunch–Kaufman LDLᵀ, upper triangle only), others as
+  real unsymmetric (``mtype=11``; friction makes the contact tangent unsymmetric).
+* ``"splu"`` — scipy's SuperLU (direct), used when pypardiso cannot be imported.
+* ``"amg-cg"`` — conjugate gradients preconditioned by one V-cycle of pyamg smoothed aggregation, for
+  symmetric positive definite systems above ``iterative_above`` unknowns, where a direct factorization
+  would need too much memory. Pass the rigid-body modes as ``near_nullspace`` for elasticity
+  (:func:`femcheck.fe.elasticity.rigid_body_modes`) — the aggregation then converges in tens of iterations.
+
+A :class:`Factorization` is made once and reused for many right-hand sides (modified Newton–Raphson keeps
+it within a load step, seed 004 §3.3). Each Factorization owns its own PARDISO instance, so two live
+factorizations never overwrite each other's internal memory.
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import logging
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+log = logging.getLogger(__name__)
+
+METHODS = ("auto", "pardiso", "splu", "amg-cg")
+#: above this many unknowns "auto" takes the iterative path (if the matrix is symmetric)
+ITERATIVE_ABOVE = 400_000
+
+
+@functools.lru_cache(maxsize=1)
+def pardiso_available() -> bool:
+    """True when pypardiso imports and finds MKL (checked lazily, never at import of this module)."""
+    try:
+        import pypardiso  # noqa: F401
+        pypardiso.PyPardisoSolver()
+    except Exception:  # ImportError, or OSError when mkl_rt is missing
+        return False
+    return True
+
+
+def is_symmetric(A, rtol: float = 1e-10) -> bool:
+    """max|A − Aᵀ| ≤ rtol · max|A| (one pass over the nonzeros)."""
+    A = sp.csr_matrix(A)
+    if A.nnz == 0:
+        return True
+    d = A - A.T
+    return (abs(d).max() if d.nnz else 0.0) <= rtol * abs(A).max()
+
+
+def choose_method(n: int, symmetric: bool, method: str = "auto", iterative_above: int = ITERATIVE_ABOVE) -> str:
+    """The method "auto" resolves to for an ``n × n`` matrix (see module docstring)."""
+    if method not in METHODS:
+        raise ValueError(f"linear solver method = {method!r}; expected one of {', '.join(METHODS)}")
+    if method != "auto":
+        return method
+    if symmetric and n > iterative_above:
+        return "amg-cg"
+    return "pardiso" if pardiso_available() else "splu"
+
+
+class Factorization:
+    """A reusable solver for one sparse square matrix A (n × n, float64).
+
+    Attributes: ``method`` ("pardiso" | "splu" | "amg-cg"), ``seconds`` (wall time of the factorization
+    or AMG setup, s), ``n`` (unknowns), ``symmetric``, ``iterations`` (CG iterations of the last solve;
+    1 for direct methods). ``solve(b)`` accepts b of shape (n,) or (n, k) and returns x of the same shape.
+    """
+
+    def __init__(self, A, method: str = "auto", *, symmetric: bool | None = None,
+                 iterative_above: int = ITERATIVE_ABOVE, near_nullspace=None, rtol: float = 1e-10,
+                 maxiter: int = 2000):
+        A = sp.csr_matrix(A, dtype=np.float64)
+        if A.shape[0] != A.shape[1]:
+            raise ValueError(f"matrix must be square, got shape {A.shape}")
+        A.sum_duplicates()
+        A.sort_indices()
+        self.n = A.shape[0]
+        self.symmetric = is_symmetric(A) if symmetric is None else bool(symmetric)
+        self.method = choose_method(self.n, self.symmetric, method, iterative_above)
+        if self.method == "amg-cg" and not self.symmetric:
+            raise ValueError("amg-cg needs a symmetric positive definite matrix; use 'pardiso' or 'splu'")
+        self.iterations = 0
+        self._rtol, self._maxiter = rtol, maxiter
+        t0 = time.perf_counter()
+        if self.method == "pardiso":
+            import pypardiso
+            if self.symmetric:
+                self._solver = pypardiso.PyPardisoSolver(mtype=-2)
+                self._A = sp.triu(A, format="csr")
+                self._A.sort_indices()
+            else:
+                self._solver = pypardiso.PyPardisoSolver(mtype=11)
+                self._A = A
+            self._solver.factorize(self._A)
+        elif self.method == "splu":
+            self._lu = spla.splu(A.tocsc(), permc_spec="COLAMD" if not self.symmetric else "MMD_AT_PLUS_A")
+        else:
+            import pyamg
+            B = None if near_nullspace is None else np.asarray(near_nullspace, dtype=float)
+            self._A = A
+            self._ml = pyamg.smoothed_aggregation_solver(A, B=B, symmetry="symmetric", max_coarse=500)
+            self._M = self._ml.aspreconditioner(cycle="V")
+        self.seconds = time.perf_counter() - t0
+        log.info("factorized %d x %d (nnz %d, symmetric=%s) with %s in %.3f s",
+                 self.n, self.n, A.nnz, self.symmetric, self.method, self.seconds)
+
+    def solve(self, b) -> np.ndarray:
+        """x with A x = b; b: (n,) or (n, k) float."""
+        b = np.asarray(b, dtype=np.float64)
+        if b.shape[0] != self.n:
+            raise ValueError(f"right-hand side has {b.shape[0]} rows; the matrix has {self.n}")
+        if self.method == "pardiso":
+            x = self._solver.solve(self._A, b)
+            self.iterations = 1
+            return np.asarray(x).reshape(b.shape)
+        if self.method == "splu":
+            self.iterations = 1
+            return self._lu.solve(b)
+        cols = b.reshape(self.n, -1)
+        out = np.empty_like(cols)
+        its = 0
+        for j in range(cols.shape[1]):
+            count = [0]
+
+            def cb(_xk, count=count):
+                count[0] += 1
+            x, info = spla.cg(self._A, cols[:, j], rtol=self._rtol, atol=0.0, maxiter=self._maxiter,
+                              M=self._M, callback=cb)
+            if info != 0:
+                from femcheck.errors import ConvergenceError
+                raise ConvergenceError(f"AMG-preconditioned CG did not reach rtol={self._rtol:g} in "
+                                       f"{self._maxiter} iterations (n={self.n})", detail={"info": info})
+            out[:, j] = x
+            its = max(its, count[0])
+        self.iterations = its
+        return out.reshape(b.shape)
+
+    def __repr__(self) -> str:
+        return f"Factorization(n={self.n}, method={self.method!r}, seconds={self.seconds:.3g})"
+
+
+def factorize(A, method: str = "auto", **kwargs) -> Factorization:
+    """Factorize (or set up the preconditioner for) sparse A; see :class:`Factorization` for ``kwargs``."""
+    return Factorization(A, method, **kwargs)
+
+
+@dataclasses.dataclass(frozen=True)
+class SolveResult:
+    """``x`` (n,) or (n, k); ``method`` used; ``seconds`` total wall time (factorization + solve);
+    ``iterations`` (CG iterations, 1 for direct); ``factor_seconds`` / ``solve_seconds`` split."""
+
+    x: np.ndarray
+    method: str
+    seconds: float
+    iterations: int
+    factor_seconds: float = 0.0
+    solve_seconds: float = 0.0
+
+
+def solve(A, b, method: str = "auto", **kwargs) -> SolveResult:
+    """Solve A x = b once (factorize + solve); ``kwargs`` as for :class:`Factorization`."""
+    fac = Factorization(A, method, **kwargs)
+    t0 = time.perf_counter()
+    x = fac.solve(b)
+    ts = time.perf_counter() - t0
+    return SolveResult(x=x, method=fac.method, seconds=fac.seconds + ts, iterations=fac.iterations,
+                       factor_seconds=fac.seconds, solve_seconds=ts)

@@ -1,0 +1,95 @@
+"""The device FE model at test points: super-elements of every leg, then all load cases.
+
+Work split (what runs where): the link super-element is the same for every leg and point (the link
+length L2 is fixed; only its orientation changes), so it is built once per mesh level; each leg needs
+its own guideway super-element (cantilever length s_i differs per leg and point) — these FE solves
+are independent tasks (:func:`guideway_task`) that the verification runs in parallel processes. The
+rest (joints, leg condensation, rigid platform, load protocol) is small dense algebra.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+
+import numpy as np
+
+from femcheck.fe_device.joints import IDEALIZATIONS, LEVELS
+from femcheck.fe_device.loads import LoadCaseResult, load_case
+from femcheck.fe_device.parts import SuperElement, guideway_element, link_element
+from femcheck.fe_device.substructure import platform_matrices
+
+log = logging.getLogger(__name__)
+
+
+def guideway_task(case, length_m: float, kind: str, size_m: float) -> SuperElement:
+    """One guideway FE solve (picklable entry point for worker processes)."""
+    return guideway_element(case, float(length_m), kind, size_m)
+
+
+def build_link(case, kind: str, size_m: float) -> SuperElement:
+    """The link super-element (once per mesh level)."""
+    return link_element(case, kind, size_m)
+
+
+@dataclasses.dataclass(frozen=True)
+class PointModel:
+    """Everything the FE model of one test point needs (SI, frame U): ``point`` label, ``A`` (6, 3),
+    ``B``, ``C`` (6, 3), ``u`` (6, 3), ``tcp`` (3,), part frames ``R_A``, ``R_B`` (6, 3, 3), ``G`` (6, 6, 6)
+    platform matrices, super-elements ``guideways`` (6) and ``link``."""
+
+    point: str
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    u: np.ndarray
+    tcp: np.ndarray
+    R_A: np.ndarray
+    R_B: np.ndarray
+    G: np.ndarray
+    guideways: tuple
+    link: SuperElement
+
+    @property
+    def K_lg(self) -> np.ndarray:
+        return np.stack([g.K for g in self.guideways])
+
+
+def point_geometry(case, points):
+    """Leg geometry of ``points`` (labels) -> LegGeometry and the sliders (n, 6) m."""
+    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
+    idx = [POINT_LABELS.index(p) for p in points]
+    legs = leg_geometry(case, test_points(case)[idx], labels=list(points))
+    return legs
+
+
+def point_model(case, legs, k: int, point: str, guideways, link: SuperElement) -> PointModel:
+    from femcheck.chain.haptic_6psu_model import guideway_frames, link_frames
+    u = legs.u[k]
+    return PointModel(point=point, A=legs.A, B=legs.B[k], C=legs.C[k], u=u, tcp=legs.tcp[k],
+                      R_A=guideway_frames(case), R_B=link_frames(u), G=platform_matrices(legs.C[k], legs.tcp[k]),
+                      guideways=tuple(guideways), link=link)
+
+
+@dataclasses.dataclass(frozen=True)
+class PointResult:
+    """All load cases of one point: ``cases`` {(level, joints, direction): LoadCaseResult}; ``seconds``."""
+
+    point: str
+    cases: dict
+    seconds: float
+
+
+def solve_point(case, model: PointModel, levels=LEVELS, joints=IDEALIZATIONS, directions=None) -> PointResult:
+    """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`)."""
+    from femcheck.chain import device_parameters
+    t0 = time.perf_counter()
+    params = device_parameters(case)
+    directions = tuple(directions or case.loads.directions)
+    out: dict[tuple, LoadCaseResult] = {}
+    for lvl in levels:
+        for j in joints:
+            for d in directions:
+                out[(lvl, j, d)] = load_case(case, model.K_lg, model.link.K, model.R_A, model.R_B, model.G,
+                                             lvl, j, d, params)
+    return PointResult(model.point, out, time.perf_counter() - t0)

@@ -1,0 +1,129 @@
+"""Load protocol of the device FE model (seed 000 §4.2 and eq. 1; CONVENTIONS.md §8-9).
+
+* simplified level: the test load P_T (50 N) along +x, +y or +z at the TCP; the model is linear, so the
+  deflection is the response to P_T alone (the 15 N preload of the experiment cancels in eq. 1).
+* detailed level: preload P_p (5 N), then P_p + P_T (20 N); deflection δ = t(P_p + P_T) − t(P_p) (eq. 1).
+  The spherical joints are nonlinear Hertz springs, F = (4/3) E* √R* δ^{3/2} (Johnson 1985 eq. 4.23,
+  CONVENTIONS.md §5), isotropic as in the analytical model. Each load state is solved exactly by a
+  fixed point on the secant stiffness k_i = F_i / δ(F_i) of each joint, F_i = max(|f_i|, F_min) the force
+  its leg transmits (the secant of a nonlinear elastic spring reproduces its force at that state):
+  start from the tangent stiffness at F_min, iterate until the largest relative change of k is < 1e-10.
+  Actuation (1/c_act) and the U-joint (K_UC, K_UB) springs are linear.
+
+The analytical detailed model instead uses the *tangent* stiffness at the force of the test load alone
+(CONVENTIONS.md §6); the two differ in the spherical-joint term only (measured in docs/verify.md).
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+
+from femcheck.errors import ConvergenceError
+from femcheck.fe_device.joints import joint_layout
+from femcheck.fe_device.leg_model import condense_legs
+from femcheck.fe_device.substructure import solve_platform
+
+log = logging.getLogger(__name__)
+
+FIXED_POINT_RTOL = 1e-10
+MAX_ITERATIONS = 200
+
+
+def direction_unit(direction: str) -> np.ndarray:
+    """'+x' -> (1, 0, 0), '-z' -> (0, 0, -1)."""
+    if len(direction) != 2 or direction[0] not in "+-" or direction[1] not in "xyz":
+        raise ValueError(f"direction = {direction!r}; expected one of +x, +y, +z, -x, -y, -z")
+    v = np.zeros(3)
+    v["xyz".index(direction[1])] = -1.0 if direction[0] == "-" else 1.0
+    return v
+
+
+def hertz_approach(F, E_star, R_star):
+    """δ(F) = (3 F / (4 E* √R*))^{2/3} (m) of a Hertz point contact under F (N) (Johnson eq. 4.23)."""
+    return (3.0 * np.asarray(F, float) / (4.0 * E_star * np.sqrt(R_star))) ** (2.0 / 3.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class LoadState:
+    """Equilibrium of one point under one TCP wrench: ``twist`` (6,), ``u_C`` (6, 6) platform-point twists,
+    ``leg_force`` (6,) N, ``k_sp`` (6,) N/m secant joint stiffness (NaN for the simplified level),
+    ``iterations`` of the fixed point (1 if linear), ``legs`` the :class:`LegSolution`."""
+
+    twist: np.ndarray
+    u_C: np.ndarray
+    leg_force: np.ndarray
+    k_sp: np.ndarray
+    iterations: int
+    legs: object
+
+
+def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params) -> LoadState:
+    """Equilibrium under ``wrench`` (6,) for 6 legs (K_lg (6, 6, 6), R_A, R_B (6, 3, 3), G (6, 6, 6)).
+
+    ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses.
+    """
+    layout = joint_layout(level, joints)
+    if level == "simplified":
+        legs = condense_legs(K_lg, K_link, R_A, R_B, layout)
+        t, uC = solve_platform(legs.K, G, wrench)
+        f = np.linalg.norm(np.einsum("iab,ib->ia", legs.K, uC)[:, :3], axis=1)
+        return LoadState(t, uC, f, np.full(6, np.nan), 1, legs)
+    c_uc, c_ub = float(np.squeeze(params.c_uc)), float(np.squeeze(params.c_ub))
+    k_act = np.full(6, 1.0 / float(np.squeeze(params.c_act)))
+    k_uj = np.tile([1.0 / c_uc, 1.0 / c_uc, 1.0 / (c_uc + c_ub)], (6, 1))
+    Es, Rs, Fmin = (float(np.squeeze(v)) for v in (params.E_star_sp, params.R_star_sp, params.F_min_sp))
+    k_sp = np.full(6, (6.0 * Es**2 * Rs * Fmin) ** (1.0 / 3.0))
+    for it in range(1, MAX_ITERATIONS + 1):
+        legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=k_sp, k_uj=k_uj)
+        t, uC = solve_platform(legs.K, G, wrench)
+        f = np.linalg.norm(np.einsum("iab,ib->ia", legs.K, uC)[:, :3], axis=1)
+        F = np.maximum(f, Fmin)
+        k_new = F / hertz_approach(F, Es, Rs)
+        change = np.max(np.abs(k_new - k_sp) / k_sp)
+        k_sp = k_new
+        if change < FIXED_POINT_RTOL:
+            legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=k_sp, k_uj=k_uj)
+            t, uC = solve_platform(legs.K, G, wrench)
+            return LoadState(t, uC, f, k_sp, it, legs)
+    raise ConvergenceError(f"Hertz secant fixed point did not converge in {MAX_ITERATIONS} iterations "
+                           f"(last relative change {change:.3g})", [], {"k_sp": k_sp.tolist()})
+
+
+@dataclasses.dataclass(frozen=True)
+class LoadCaseResult:
+    """One (level, joints, direction) load case: ``twist`` (6,) TCP deflection (m, rad) per eq. 1,
+    ``deflection_m`` along the load, ``contributions`` (5,) element shares of the incremental strain
+    energy (order lg, act, sp, prox, uj), ``iterations`` fixed-point iterations (total state),
+    ``states``: the :class:`LoadState` s solved (preload first for the detailed level)."""
+
+    level: str
+    joints: str
+    direction: str
+    load_N: float
+    twist: np.ndarray
+    deflection_m: float
+    contributions: np.ndarray
+    iterations: int
+    states: tuple
+
+
+def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, direction: str, params) -> LoadCaseResult:
+    """Apply the protocol of ``level`` along ``direction`` and return the deflection (module docstring)."""
+    d = direction_unit(direction)
+    L = case.loads
+    if level == "simplified":
+        P = L.simplified_test_N
+        s = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[P * d, 0, 0, 0], level, joints, params)
+        states, twist = (s,), s.twist
+        inc = s.legs.interior(s.u_C)["energy"]
+    else:
+        P = L.detailed_test_N
+        sp_ = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[L.detailed_preload_N * d, 0, 0, 0], level, joints, params)
+        st = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[(L.detailed_preload_N + P) * d, 0, 0, 0], level, joints, params)
+        states, twist = (sp_, st), st.twist - sp_.twist
+        inc = st.legs.interior(st.u_C - sp_.u_C)["energy"]
+    e = inc.sum(axis=0)
+    return LoadCaseResult(level, joints, direction, P, twist, float(twist[:3] @ d), e / e.sum(),
+                          states[-1].iterations, states)

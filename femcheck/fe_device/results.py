@@ -1,0 +1,141 @@
+"""Deformed FE models as files: VTU (meshio) of every load case of a point, off-screen PNGs of a few.
+
+The solid fields are recovered from the condensed solution: for a part with reference-node twists
+u_ref (in the part frame), the vertex displacements are u = X u_ref (``SuperElement.recovery``), rotated
+to U. Detailed-level fields follow the eq. 1 protocol: (state at P_p + P_T) − (state at P_p).
+One VTU per test point holds the mesh of the six guideways and six links (world frame U, m, linear
+tetrahedra) and one displacement field per (level, joints, direction), named ``u_<level>_<joints>_<dir>``.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from femcheck.fe_device.leg_model import rot12
+from femcheck.kinematics.frames import rot6
+
+log = logging.getLogger(__name__)
+
+
+def _case_nodes(res) -> dict:
+    """Leg nodal twists (6, 6) for 'B_g', 'B_l', 'C_l' of a load case, eq. 1 increment for detailed."""
+    last = res.states[-1]
+    cur = last.legs.interior(last.u_C)
+    if len(res.states) == 1:
+        return cur
+    first = res.states[0]
+    pre = first.legs.interior(first.u_C)
+    return {k: cur[k] - pre[k] for k in ("B_g", "B_l", "C_l")}
+
+
+def point_fields(model, point_result):
+    """World mesh and displacement fields of one point.
+
+    Returns ``points`` (N, 3) m, ``tets`` (M, 4), ``part`` (M,) 0 = guideway, 1 = link, ``leg`` (M,) chain,
+    and ``fields`` {name: (N, 3) m}. Beams (no solid mesh) contribute nothing.
+    """
+    pts, tets, part, leg, blocks, off = [], [], [], [], [], 0
+    link = model.link
+    for i in range(6):
+        for kind, se, R, origin in ((0, model.guideways[i], model.R_A[i], model.A[i]), (1, link, model.R_B[i], model.B[i])):
+            if len(se.vertices) == 0:
+                continue
+            pts.append(se.vertices @ R.T + origin)
+            tets.append(se.tets + off)
+            part.append(np.full(len(se.tets), kind))
+            leg.append(np.full(len(se.tets), i))
+            blocks.append((kind, i, off, len(se.vertices), se, R))
+            off += len(se.vertices)
+    if not pts:
+        return None
+    fields = {}
+    for (lvl, j, d), res in point_result.cases.items():
+        nodes = _case_nodes(res)
+        U = np.zeros((off, 3))
+        for kind, i, o, nv, se, R in blocks:
+            if kind == 0:
+                uref = rot6(R).T @ nodes["B_g"][i]
+            else:
+                uref = rot12(R).T @ np.r_[nodes["B_l"][i], nodes["C_l"][i]]
+            U[o:o + nv] = (se.recovery @ uref).reshape(nv, 3) @ R.T
+        fields[f"u_{lvl}_{j}_{d}"] = U
+    return np.vstack(pts), np.vstack(tets), np.concatenate(part), np.concatenate(leg), fields
+
+
+def write_point_vtu(path, model, point_result) -> bool:
+    """Write the VTU of one point atomically (temporary file + rename). False when there is no solid mesh."""
+    import meshio
+    got = point_fields(model, point_result)
+    if got is None:
+        return False
+    points, tets, part, leg, fields = got
+    mesh = meshio.Mesh(points, [("tetra", tets)], point_data={k: v.astype(np.float32) for k, v in fields.items()},
+                       cell_data={"part": [part.astype(np.int32)], "leg": [leg.astype(np.int32)]})
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".vtu", dir=path.parent)
+    os.close(fd)
+    try:
+        meshio.write(tmp, mesh, file_format="vtu")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return True
+
+
+def deformed_png(model, point_result, field: str, title: str, scale: float | None = None) -> bytes | None:
+    """Off-screen picture (PNG bytes) of the deformed model of ``field`` coloured by |u| (mm); the
+    displacement is magnified so that the largest one is 15 mm on screen. pyvista first, matplotlib
+    (a scatter of the deformed surface nodes) when VTK cannot render."""
+    got = point_fields(model, point_result)
+    if got is None:
+        return None
+    points, tets, part, leg, fields = got
+    U = fields[field]
+    mag = np.linalg.norm(U, axis=1)
+    scale = scale or (0.015 / max(mag.max(), 1e-30))
+    try:
+        import warnings
+
+        import pyvista as pv
+        pv.OFF_SCREEN = True
+        cells = np.hstack([np.full((len(tets), 1), 4), tets]).ravel()
+        grid = pv.UnstructuredGrid(cells, np.full(len(tets), 10, dtype=np.uint8), points + scale * U)
+        grid.point_data["displacement (mm)"] = mag * 1e3
+        ghost = pv.UnstructuredGrid(cells, np.full(len(tets), 10, dtype=np.uint8), points)
+        p = pv.Plotter(off_screen=True, window_size=(900, 700))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # pyvista's FutureWarning about extract_surface's default algorithm
+            p.add_mesh(ghost.extract_surface(), color="lightgrey", opacity=0.25)
+            p.add_mesh(grid.extract_surface(), scalars="displacement (mm)", cmap="viridis")
+        p.add_text(f"{title} (x{scale:.0f})", font_size=10)
+        p.view_isometric()
+        img = p.screenshot(return_img=True)
+        p.close()
+        import io
+        import matplotlib.pyplot as plt
+        buf = io.BytesIO()
+        plt.imsave(buf, img, format="png")
+        return buf.getvalue()
+    except Exception as exc:  # VTK without a usable render window
+        log.warning("pyvista rendering failed (%s); drawing the deformed nodes with matplotlib", exc)
+        import io
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig = plt.figure(figsize=(7, 6), dpi=100)
+        ax = fig.add_subplot(projection="3d")
+        X = points + scale * U
+        sel = slice(None, None, max(1, len(X) // 20000))
+        sc = ax.scatter(*X[sel].T, c=mag[sel] * 1e3, s=1)
+        fig.colorbar(sc, label="|u| (mm)")
+        ax.set_title(f"{title} (x{scale:.0f})")
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png")
+        plt.close(fig)
+        return buf.getvalue()
