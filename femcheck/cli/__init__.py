@@ -21,6 +21,13 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
+
+
+@app.callback()
+def _root() -> None:
+    """femcheck: analytical stiffness models vs finite elements and measured data."""
+
+
 _registered = False
 
 
@@ -28,7 +35,9 @@ def console():
     """A rich console that does not squeeze tables when output is not a terminal."""
     from rich.console import Console
     import sys as _sys
-    return Console(width=None if _sys.stdout.isatty() else 140)
+    tty = _sys.stdout.isatty()
+    # in logs and pipes, long lines stay whole (grep-able); tables still fit 140 columns
+    return Console(width=None if tty else 140, soft_wrap=not tty)
 
 
 def _register_all() -> None:

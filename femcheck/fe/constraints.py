@@ -118,6 +118,7 @@ def _from_relations(ndof: int, dependent, D, b) -> Constraints:
     """Resolve u_dep = D u + b (D may reference dependent DOFs) into u = T q + g."""
     dependent = np.asarray(dependent, dtype=np.int64)
     D = sp.csr_matrix(D, shape=(dependent.size, ndof))
+    D.eliminate_zeros()
     b = np.asarray(b, dtype=float).reshape(dependent.size)
     if dependent.size and (dependent.min() < 0 or dependent.max() >= ndof):
         raise ValueError(f"constrained DOF out of range 0..{ndof - 1}")
@@ -135,16 +136,19 @@ def _from_relations(ndof: int, dependent, D, b) -> Constraints:
     Dc = D.tocsc()
     D_d = sp.csr_matrix(Dc[:, dependent])
     base = sp.hstack([Dc[:, free], sp.csr_matrix(b[:, None])], format="csr")
+    # D_d must be nilpotent (no DOF depends on itself through a chain): after k substitutions,
+    # X_k = Σ_{m<k} D_d^m base is exact once the pattern of D_d^k is empty.
     X = base
-    if D_d.nnz:
-        for it in range(dependent.size + 1):
-            Xn = sp.csr_matrix(D_d @ X + base)
-            diff = Xn - X
-            X = Xn
-            if diff.nnz == 0 or abs(diff).max() == 0.0:
-                break
-        else:
+    Pk = sp.csr_matrix((np.ones(D_d.nnz), D_d.indices, D_d.indptr), shape=D_d.shape)
+    P1 = Pk.copy()
+    depth = 0
+    while Pk.nnz:
+        depth += 1
+        if depth > dependent.size:
             raise ValueError("cyclic constraint definition: a dependent DOF depends on itself through a chain")
+        X = sp.csr_matrix(D_d @ X + base)
+        Pk = sp.csr_matrix(Pk @ P1)
+        Pk.data[:] = 1.0
     X = sp.csr_matrix(X)
     Xi, g_dep = X[:, :-1].tocoo(), X[:, -1].toarray().ravel()
     rows = np.r_[free, dependent[Xi.row]]

@@ -38,12 +38,13 @@ def lame(E, nu):
 def vector_basis(mesh: skfem.MeshTet, order: int = 2, intorder: int | None = None) -> skfem.CellBasis:
     """Vector-valued (3 components) Lagrange basis on a tetrahedral mesh; order 1 (P1) or 2 (P2).
 
-    ``intorder`` defaults to 2·order (exact for the stiffness of straight-sided tets and the P2 mass).
+    ``intorder`` defaults to 2·(order − 1), which integrates the stiffness of straight-sided tets exactly
+    (strains are polynomials of degree order − 1); :func:`assemble_mass` raises it to 2·order for itself.
     """
     elems = {1: skfem.ElementTetP1, 2: skfem.ElementTetP2}
     if order not in elems:
         raise ValueError(f"element order = {order}; expected 1 (P1) or 2 (P2)")
-    return skfem.Basis(mesh, skfem.ElementVector(elems[order]()), intorder=intorder or 2 * order)
+    return skfem.Basis(mesh, skfem.ElementVector(elems[order]()), intorder=intorder or max(1, 2 * (order - 1)))
 
 
 def _per_element(basis, value, name: str) -> np.ndarray:
@@ -72,15 +73,23 @@ def _mass_form(u, v, w):
 
 
 def assemble_stiffness(basis, E, nu) -> sp.csr_matrix:
-    """Elastic stiffness K (basis.N × basis.N, N/m); E (Pa), ν scalars or per-element arrays (n_elements,)."""
+    """Elastic stiffness K (basis.N × basis.N, N/m); E (Pa), ν scalars or per-element arrays (n_elements,).
+
+    Assembles the weak form :func:`_elasticity_form` with ``skfem.asm`` using the quadrature of ``basis``.
+    """
     lam, mu = lame(E, nu)
     K = asm(_elasticity_form, basis, lam=_per_element(basis, lam, "lambda"), mu=_per_element(basis, mu, "mu"))
     return sp.csr_matrix(K)
 
 
 def assemble_mass(basis, density) -> sp.csr_matrix:
-    """Consistent mass M (basis.N × basis.N, kg); density (kg/m³) scalar or per-element (n_elements,)."""
-    return sp.csr_matrix(asm(_mass_form, basis, rho=_per_element(basis, density, "density")))
+    """Consistent mass M (basis.N × basis.N, kg); density (kg/m³) scalar or per-element (n_elements,).
+
+    Integrated with a quadrature of order 2·p (exact for straight-sided tets), whatever ``basis`` uses.
+    """
+    p = 2 if basis.elem.elem.maxdeg >= 2 else 1
+    mb = skfem.Basis(basis.mesh, basis.elem, intorder=2 * p)
+    return sp.csr_matrix(asm(_mass_form, mb, rho=_per_element(mb, density, "density")))
 
 
 def strain(basis, u) -> np.ndarray:
