@@ -10,18 +10,11 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
-from femcheck.case.schema import CaseVariants, Context, Material, build_materials, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "contact_specimen"
 
 _FACES = ("x-", "x+", "y-", "y+", "z-", "z+")
-
-
-@dataclass(frozen=True)
-class Meta:
-    name: str = option(doc="case name")
-    version: int = quantity("-", default=1)
-    kind: str = option(CASE_KIND, doc="case kind (registry key)")
 
 
 @dataclass(frozen=True)

@@ -14,17 +14,9 @@ from typing import Literal
 import numpy as np
 
 from femcheck.case.haptic_6psu_solid import SolidModel
-from femcheck.case.schema import CaseVariants, Context, Material, build_materials, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "haptic_6psu"
-
-
-@dataclass(frozen=True)
-class Meta:
-    name: str = option(doc="case name")
-    version: int = quantity("-", default=1)
-    conventions: str = option("", doc="conventions document the case follows")
-    kind: str = option(CASE_KIND, doc="case kind (registry key)")
 
 
 @dataclass(frozen=True)

@@ -20,20 +20,12 @@ from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import CaseVariants, Context, build_section, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, build_section, build_sections, option, quantity
 from femcheck.vjm.rcube_geometry import RCubeGeometry
 
 CASE_KIND = "parallel_vjm"
 
 Row6 = tuple[float, float, float, float, float, float]
-
-
-@dataclass(frozen=True)
-class Meta:
-    name: str = option(doc="case name")
-    kind: str = option(CASE_KIND, doc="case kind (registry key)")
-    version: int = quantity("-", default=1)
-    reference: str = option("", doc="where the numbers come from")
 
 
 @dataclass(frozen=True)
@@ -144,9 +136,9 @@ class ParallelVJMCase(CaseVariants):
 def build(raw: dict, path) -> ParallelVJMCase:
     """Validate a parsed TOML document into a :class:`ParallelVJMCase` (errors name file and key)."""
     ctx = Context(path)
-    parts = build_sections(ctx, {"meta": {"name": "unnamed"}, **raw},
+    parts = build_sections(ctx, raw,
                            {"meta": Meta, "geometry": Geometry, "links": Links, "fitting": Fitting},
-                           optional=("fitting",), also_allowed=("test_points",))
+                           optional=("meta", "fitting"), also_allowed=("test_points",))
     meta, geom, links, fitting = parts["meta"], parts["geometry"], parts["links"], parts["fitting"]
     tps = raw.get("test_points", [])
     if not isinstance(tps, list):

@@ -215,3 +215,14 @@ class CaseVariants:
     def with_params(self, **dotted):
         from femcheck.case.registry import with_params
         return with_params(self, dotted)
+
+
+@dataclasses.dataclass(frozen=True)
+class CaseMeta:
+    """The ``[meta]`` table every case kind shares: what the case is and where its numbers come from."""
+
+    name: str = option("unnamed", doc="case name")
+    kind: str = option("", doc="case kind (registry key: the module femcheck/case/<kind>.py)")
+    version: int = quantity("-", default=1)
+    reference: str = option("", doc="where the numbers come from")
+    conventions: str = option("", doc="conventions document the case follows")

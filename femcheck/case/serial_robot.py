@@ -26,20 +26,12 @@ from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import CaseVariants, Context, build_section, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, build_section, build_sections, option, quantity
 from femcheck.vjm import drive_train as dt
 from femcheck.vjm.dh import DHChain
 from femcheck.vjm.serial_vjm import SerialVJM
 
 CASE_KIND = "serial_robot"
-
-
-@dataclass(frozen=True)
-class Meta:
-    name: str = option(doc="case name")
-    kind: str = option(CASE_KIND, doc="case kind (registry key)")
-    version: int = quantity("-", default=1)
-    reference: str = option("", doc="where the numbers come from")
 
 
 @dataclass(frozen=True)
@@ -199,9 +191,9 @@ class SerialRobotCase(CaseVariants):
 def build(raw: dict, path) -> SerialRobotCase:
     """Validate a parsed TOML document into a :class:`SerialRobotCase` (errors name file and key)."""
     ctx = Context(path)
-    parts = build_sections(ctx, {"meta": {"name": "unnamed"}, **raw},
+    parts = build_sections(ctx, raw,
                            {"meta": Meta, "model": ModelOptions, "kinematics": Kinematics},
-                           optional=("model",), also_allowed=("joints", "identification"))
+                           optional=("meta", "model"), also_allowed=("joints", "identification"))
     meta, model, kin = parts["meta"], parts["model"], parts["kinematics"]
     rows = raw.get("joints")
     if not isinstance(rows, list) or not rows:
