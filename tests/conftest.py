@@ -24,3 +24,11 @@ def case():
 def points(case):
     import femcheck
     return femcheck.test_points(case)
+
+
+@pytest.fixture(scope="session")
+def isolated_mesh_cache(tmp_path_factory):
+    """Mesh cache in a temporary folder, so geometry tests neither read nor fill the user's cache."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("FEMCHECK_CACHE", str(tmp_path_factory.mktemp("meshes")))
+        yield

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from femcheck.case import load_case
 from femcheck.cli import get_app
 from geometry import build_part
 from geometry.beam_mesh import guideway_beam, link_beam, rectangle_section, tube_section
@@ -17,16 +16,7 @@ from geometry.quality import dihedral_angles_deg, is_watertight, radius_ratio
 CASE = "cases/haptic_6psu.toml"
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _cache_dir(tmp_path_factory):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("FEMCHECK_CACHE", str(tmp_path_factory.mktemp("meshes")))
-        yield
-
-
-@pytest.fixture(scope="module")
-def case():
-    return load_case(CASE)
+pytestmark = pytest.mark.usefixtures("isolated_mesh_cache")
 
 
 def test_vtu_round_trip_keeps_regions(case, tmp_path):

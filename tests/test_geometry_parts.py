@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from femcheck.case import load_case
 from femcheck.errors import CaseError, FemcheckError
 from geometry import MeshingError, build_part, cache
 from geometry.case_params import with_params
@@ -29,16 +28,7 @@ EXPECTED_REGIONS = {
 }
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _cache_dir(tmp_path_factory):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("FEMCHECK_CACHE", str(tmp_path_factory.mktemp("meshes")))
-        yield
-
-
-@pytest.fixture(scope="module")
-def case():
-    return load_case(CASE)
+pytestmark = pytest.mark.usefixtures("isolated_mesh_cache")
 
 
 @pytest.fixture(scope="module")

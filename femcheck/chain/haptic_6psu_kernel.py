@@ -202,6 +202,16 @@ def _hertz_k(F, Estar, Rstar, Fmin):
 
 
 @njit(cache=True, error_model="numpy")
+def _released_leg_force(a_l, csp_l, g_l, t):
+    """Signed axial force f = k_i g_i^T t of a two-force leg, 1/k_i = sum of its element compliances."""
+    kl = 1.0 / (a_l[0] + a_l[1] + a_l[3] + a_l[4] + csp_l)
+    f = 0.0
+    for i in range(6):
+        f += g_l[i] * t[i]
+    return kl * f
+
+
+@njit(cache=True, error_model="numpy")
 def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, released, sp_present, shear, c_rot,
                  K_out, t_out, Wc_out, ksp_out, energy_out, iters_out):
     """Evaluate n poses. Shapes: B, C, u (n, 6, 3); tcp, zP (n, 3); slider (n, 6); R_lg (6, 3, 3); e (3,);
@@ -420,11 +430,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
             change = 0.0
             for l in range(6):
                 if released:
-                    kl = 1.0 / (a[l, 0] + a[l, 1] + a[l, 3] + a[l, 4] + csp[l])
-                    f = 0.0
-                    for i in range(6):
-                        f += g[l, i] * t[i]
-                    F = abs(kl * f)
+                    F = abs(_released_leg_force(a[l], csp[l], g[l], t))
                 else:
                     for j in range(3):
                         acc = 0.0
@@ -465,11 +471,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
         # ---- chain wrenches and complementary energy per element
         for l in range(6):
             if released:
-                kl = 1.0 / (a[l, 0] + a[l, 1] + a[l, 3] + a[l, 4] + csp[l])
-                f = 0.0
-                for i in range(6):
-                    f += g[l, i] * t[i]
-                f *= kl
+                f = _released_leg_force(a[l], csp[l], g[l], t)
                 for i in range(3):
                     Wc_out[p, l, i] = f * u[p, l, i]
                     Wc_out[p, l, 3 + i] = 0.0
