@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import femcheck
-from femcheck.errors import FemcheckError
+from femcheck.errors import CaseError, FemcheckError
 from femcheck.sweep.evaluate_analytical import run_analytical_task
 from femcheck.sweep.executor import SweepInterrupted
 from femcheck.sweep.parameters import parse_params
@@ -194,9 +194,10 @@ def test_cli_killed_by_signal_resumes(case, ranges, tmp_path):
     _assert_same(pq.read_table(store.results_path), uninterrupted.table)
 
 
-def test_fe_model_is_a_clear_error(case, ranges, tmp_path):
-    with pytest.raises(FemcheckError, match="FE sweeps need the whole-device FE verification"):
-        run_sweep(case, ranges, tmp_path, model="fe")
+def test_fe_sweep_bad_mesh_level_is_a_clear_error_before_any_work(case, ranges, tmp_path):
+    with pytest.raises(CaseError, match="--mesh"):
+        run_sweep(case, ranges, tmp_path, model="fe", mesh="medium")
+    assert not any(tmp_path.iterdir())
 
 
 def test_longer_sobol_sequence_reuses_stored_samples(case, ranges, tmp_path):

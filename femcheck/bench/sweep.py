@@ -1,4 +1,4 @@
-"""Bench ``sweep``: analytical sweep throughput and the local-pool overhead (issue 8).
+"""Bench ``sweep``: analytical sweep throughput, the local-pool overhead (issue 8) and the FE sweep wall time.
 
 1. One full analytical sweep of the detailed model on the reference case: an LHS over two element
    parameters (guideway width, link outer diameter), 111,112 samples x 9 cube points = 1,000,008
@@ -10,8 +10,11 @@
    of 2 workers: the pool overhead (process start-up, pickling, result transfer) is the difference. The
    in-process run also gives the CPU seconds per million sample-points, a per-core cost that does not
    depend on what else runs on the machine (the wall-clock figures do: the load average is recorded).
-
-FE sweeps are not available until the whole-device FE verification exists, so there is no FE figure.
+3. An FE sweep (``--model fe``): :data:`FE_SAMPLES` LHS samples of the link outer diameter x P0, coarse
+   mesh, detailed FE level, one sample per task, on a pool of 1 and of 2 workers ("FE sweep wall time
+   with 1 and 2 workers"). ``fe_sample_s_mean`` is the 1-worker wall time per sample (pool start-up
+   included). Each run starts from its own empty mesh cache (``FEMCHECK_CACHE``), as a fresh sweep
+   would, so both pay the same meshing. ``FEMCHECK_BENCH_FE_SAMPLES`` changes the sample count.
 """
 from __future__ import annotations
 
@@ -22,6 +25,10 @@ import time
 AREA = "sweep"
 
 _PARAMS = ["guideway.width_radial_m=0.010:0.020", "proximal_link.outer_diameter_m=0.006:0.010"]
+#: FE part: one parameter (the link tube, which dominates the FE cost), one point, coarse mesh
+_FE_PARAMS = ["proximal_link.outer_diameter_m=0.006:0.008"]
+FE_SAMPLES = 4
+FE_POINTS = ("P0",)
 
 
 def _sweep(case, ranges, samples, jobs, out):
@@ -29,6 +36,40 @@ def _sweep(case, ranges, samples, jobs, out):
     t0, c0 = time.perf_counter(), time.process_time()
     o = run_sweep(case, ranges, out, design="lhs", samples=samples, seed=1, model="detailed", jobs=jobs)
     return time.perf_counter() - t0, o, time.process_time() - c0
+
+
+def fe_sweep_figures(case, tmp: str, samples: int = FE_SAMPLES) -> dict:
+    """Wall time of an FE sweep of ``samples`` samples x :data:`FE_POINTS` on 1 and on 2 workers."""
+    from femcheck.sweep.parameters import parse_params
+    from femcheck.sweep.run import run_sweep
+    ranges = parse_params(case, _FE_PARAMS)
+    walls, n_ok = {}, []
+    saved = os.environ.get("FEMCHECK_CACHE")
+    try:
+        for workers in (1, 2):
+            os.environ["FEMCHECK_CACHE"] = f"{tmp}/fe_meshes_{workers}"  # cold cache; forked workers inherit it
+            t0 = time.perf_counter()
+            o = run_sweep(case, ranges, f"{tmp}/fe_{workers}", design="lhs", samples=samples, seed=1, model="fe",
+                          points=FE_POINTS, jobs=workers, fe_level="detailed", mesh="coarse")
+            walls[workers] = time.perf_counter() - t0
+            n_ok.append(int(o.manifest["sample_points_ok"]))
+    finally:
+        if saved is None:
+            os.environ.pop("FEMCHECK_CACHE", None)
+        else:
+            os.environ["FEMCHECK_CACHE"] = saved
+    return {
+        "fe_sweep_samples": samples,
+        "fe_sweep_points": len(FE_POINTS),
+        "fe_sweep_mesh": "coarse",
+        "fe_sweep_level": "detailed",
+        "fe_sweep_sample_points_ok": min(n_ok),  # of each run
+        "fe_sweep_wall_s_1_worker": round(walls[1], 2),
+        "fe_sweep_wall_s_2_workers": round(walls[2], 2),
+        "fe_sweep_speedup_2_workers": round(walls[1] / walls[2], 3),
+        "fe_sample_s_mean": round(walls[1] / samples, 2),
+        "fe_load_average_1min_at_end": round(os.getloadavg()[0], 2),
+    }
 
 
 def run() -> dict:
@@ -65,6 +106,6 @@ def run() -> dict:
             "chain_evaluations_per_s": round(big * n_pts * len(case.loads.directions) / wall, 1),
             "target_1e6_points_in_60_s_met": bool(big * n_pts >= 1_000_000 and wall <= 60.0),
             "load_average_1min_at_end": round(os.getloadavg()[0], 2),
-            "fe_sweep": "not available: needs the whole-device FE verification (make verify)",
         })
+        figures.update(fe_sweep_figures(case, tmp, int(os.environ.get("FEMCHECK_BENCH_FE_SAMPLES", FE_SAMPLES))))
     return figures

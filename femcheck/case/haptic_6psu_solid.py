@@ -26,6 +26,7 @@ class SolidSphericalJoint:
     socket_depth_m: float = quantity("m", default=0.002, doc="cup depth from the seat top to the cup bottom (<= socket radius)")
     contact_zone_radius_m: float = quantity("m", default=0.001, doc="radius around the nominal contact point meshed fine and tagged as contact (about 3x the Hertz radius at 15 N)")
     link_cap_half_angle_deg: float = quantity("deg", default=30.0, doc="half angle of the ball cap tied to the proximal link (coupling)")
+    friction: float = quantity("-", check="nonnegative", default=0.10, doc="Coulomb coefficient ball/seat (steel on UHMWPE, dry about 0.1-0.2)")
 
     def __post_init__(self):
         if not 0.0 < self.link_cap_half_angle_deg < 90.0:
@@ -46,6 +47,7 @@ class SolidUniversalJoint:
     yoke_wall_m: float = quantity("m", default=0.0015, doc="yoke material around a bore (arm width = 2 (bore radius + wall))")
     yoke_arm_length_m: float = quantity("m", default=0.005, doc="arm length beyond the bore block toward the link / platform (mount face)")
     hub_half_length_m: float = quantity("m", default=0.002, doc="half length of each pin tied rigidly to the cross hub")
+    friction: float = quantity("-", check="nonnegative", default=0.15, doc="Coulomb coefficient pin/bore (steel in aluminium, greased about 0.1-0.2)")
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,5 @@
-"""``femcheck sweep``: parameter sweeps of the analytical stiffness models, sensitivity, HTML summary."""
+"""``femcheck sweep``: parameter sweeps of the analytical stiffness models or the device FE model,
+sensitivity, HTML summary."""
 from __future__ import annotations
 
 from enum import Enum
@@ -20,6 +21,19 @@ class SweepModel(str, Enum):
     fe = "fe"
 
 
+class FELevel(str, Enum):
+    """FE level of ``--model fe``: load protocol and joint model of the device FE (docs/verify.md)."""
+    simplified = "simplified"
+    detailed = "detailed"
+
+
+class MeshLevel(str, Enum):
+    """Mesh level of ``--model fe`` (``femcheck.fe_device.mesh_levels``)."""
+    coarse = "coarse"
+    default = "default"
+    fine = "fine"
+
+
 def register(app: typer.Typer) -> None:
     @app.command("sweep")
     def sweep_cmd(
@@ -27,7 +41,9 @@ def register(app: typer.Typer) -> None:
         param: list[str] = typer.Option(..., "--param", help="KEY=LO:HI[:N|log], SI units of the key; repeat per parameter"),
         design: Design = typer.Option(Design.lhs, "--design", help="grid (levels N per key), lhs, or sobol (Saltelli, gives Sobol' indices)"),
         samples: int = typer.Option(None, "--samples", help="lhs: samples; sobol: base samples n (power of 2; n (d+2) runs); grid: default levels"),
-        model: SweepModel = typer.Option(SweepModel.detailed, "--model", help="simplified | detailed | fe (fe needs the FE verification)"),
+        model: SweepModel = typer.Option(SweepModel.detailed, "--model", help="simplified | detailed | fe (whole-device FE, one sample per task)"),
+        fe_level: FELevel = typer.Option(None, "--fe-level", help="--model fe only: FE level simplified | detailed (default detailed)"),
+        mesh: MeshLevel = typer.Option(None, "--mesh", help="--model fe only: mesh level coarse | default | fine (default coarse)"),
         joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's model.joint_rotations"),
         points: str = typer.Option("cube", "--points", help="cube (P0..P8) or a list such as P0,P3"),
         out: str = typer.Option(None, "--out", help="output folder (default reports/sweep/<case name>)"),
@@ -35,7 +51,7 @@ def register(app: typer.Typer) -> None:
         resume: bool = typer.Option(False, "--resume", help="continue a sweep in --out, skipping finished samples"),
         jobs: int = typer.Option(None, "--jobs", help="local worker processes (default: CPU count; 0 = in this process)"),
         seed: int = typer.Option(0, "--seed", help="seed of the lhs / sobol design"),
-        chunk: int = typer.Option(None, "--chunk", help="samples per task (default about 20,000 sample-points)"),
+        chunk: int = typer.Option(None, "--chunk", help="samples per task (default about 20,000 sample-points; 1 for --model fe)"),
         no_report: bool = typer.Option(False, "--no-report", help="skip the HTML summary"),
     ):
         """Sweep case parameters; store results (Parquet), elasticities, Sobol' indices and an HTML summary.
@@ -56,16 +72,24 @@ def register(app: typer.Typer) -> None:
         from femcheck.sweep.report import write_report
         from femcheck.sweep.run import parse_points, preflight, run_sweep
 
+        if model != SweepModel.fe and (fe_level is not None or mesh is not None):
+            raise typer.BadParameter(f"{'--fe-level' if fe_level is not None else '--mesh'} applies to --model fe only "
+                                     f"(got --model {model.value})")
+        fe_level_value = (fe_level or FELevel.detailed).value
+        mesh_value = (mesh or MeshLevel.coarse).value
         case = load_case(case_path)
         ranges = parse_params(case, list(param))
         pts = parse_points(points)
         out_dir = Path(out) if out else Path("reports/sweep") / Path(case_path).stem
         refuse_input_overwrite(out_dir, [case_path])
-        preflight(case, out_dir, model=model.value, joints=joints.value if joints else None, resume=resume)
+        preflight(case, out_dir, model=model.value, joints=joints.value if joints else None, resume=resume,
+                  fe_level=fe_level_value, mesh=mesh_value)
         con = console()
         con.print(f"[bold]{case.meta.name}[/]: sweeping " + ", ".join(
             f"{r.key} {r.lo:g}..{r.hi:g}{' (log)' if r.log else ''}" for r in ranges)
-            + f" — design {design.value}, model {model.value}, points {','.join(pts)}")
+            + f" — design {design.value}, model {model.value}"
+            + (f" (FE level {fe_level_value}, mesh {mesh_value})" if model == SweepModel.fe else "")
+            + f", points {','.join(pts)}")
         with Progress(TextColumn("[bold]sweep"), BarColumn(), MofNCompleteColumn(), TextColumn("tasks"),
                       TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=con,
                       transient=False) as bar:
@@ -73,6 +97,7 @@ def register(app: typer.Typer) -> None:
             outcome = run_sweep(case, ranges, out_dir, design=design.value, samples=samples, seed=seed,
                                 model=model.value, joints=joints.value if joints else None, points=pts,
                                 scheduler=scheduler, jobs=jobs, resume=resume, chunk_samples=chunk,
+                                fe_level=fe_level_value, mesh=mesh_value,
                                 on_progress=lambda done, total: bar.update(tid, completed=done, total=total))
         man = outcome.manifest
         t = man["timing"]
@@ -84,9 +109,15 @@ def register(app: typer.Typer) -> None:
         an = analyse(outcome)
         if not an.ok.all():
             con.print(f"[yellow]{int((~an.ok).sum())} of {an.ok.size} samples could not be evaluated at every point "
-                      "(unreachable or not converged); they are stored with ok = false and NaN results[/]")
-        local = local_elasticities(case, ranges, model=model.value, joints=joints.value if joints else None, points=pts)
-        tab = Table(title="elasticity d ln k_min / d ln p (global over the box | local at nominal)")
+                      "(unreachable or not converged); they are stored with ok = false and NaN results"
+                      + (" (the failure column says why)" if model == SweepModel.fe else "") + "[/]")
+        # local elasticities need 2 d extra evaluations at the nominal design: for an FE sweep (2 d more FE
+        # solves) they come from the analytical model of the same level, said in the title and kept out of
+        # the HTML summary (whose local column does not say which model it comes from)
+        local_model = fe_level_value if model == SweepModel.fe else model.value
+        local = local_elasticities(case, ranges, model=local_model, joints=joints.value if joints else None, points=pts)
+        tab = Table(title="elasticity d ln k_min / d ln p (global over the box | local at nominal"
+                    + (f", analytical {local_model} model)" if model == SweepModel.fe else ")"))
         tab.add_column("load")
         for r in ranges:
             tab.add_column(r.key, justify="right")
@@ -104,4 +135,4 @@ def register(app: typer.Typer) -> None:
             con.print(st)
         con.print(f"results: {outcome.store.results_path}  manifest: {outcome.store.manifest_path}")
         if not no_report:
-            con.print(f"summary: {write_report(outcome, an, local)}")
+            con.print(f"summary: {write_report(outcome, an, None if model == SweepModel.fe else local)}")

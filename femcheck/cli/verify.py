@@ -30,16 +30,20 @@ def register(app: typer.Typer) -> None:
         vtu: bool = typer.Option(True, "--vtu/--no-vtu", help="write a VTU of the deformed FE models per point"),
         convergence: str = typer.Option(None, "--convergence", help="mesh-convergence study (coarse/default/fine) at this point, "
                                         "e.g. P0; default: P0 for a full default-mesh run, else none ('none' to skip)"),
+        joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="detailed level: run the contact FE of the "
+                                      "ball alone under tilt and use its measured slip moment in the contact joints "
+                                      "(about 1-3 min); off: the theoretical slip moment mu F R"),
     ):
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
-        rel_error), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
+        rel_error; the detailed file compares the contact-joint FE with both idealizations, and
+        errors_detailed_matched.csv the FE with the same idealization), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
         plots, VTU per point, report.html and manifest.json into --out.
         """
         from femcheck.cli import console
         from femcheck.fe_device.mesh_levels import MESH_LEVELS
-        from femcheck.verify.run import error_rows, error_table, fe_error_rows, run_verify
+        from femcheck.verify.run import error_rows, error_table, fe_error_rows, has_contact_joints, run_verify
         if level not in LEVEL_CHOICES:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:
@@ -61,7 +65,8 @@ def register(app: typer.Typer) -> None:
         con = console()
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
         reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")
-        n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0)
+        n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0) + \
+            (2 if joint_fe and "detailed" in levels else 0)
         with Progress(TextColumn("FE solves"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                       TextColumn("{task.description}"), console=con, disable=not levels) as bar:
             task = bar.add_task("", total=n_solves)
@@ -69,7 +74,7 @@ def register(app: typer.Typer) -> None:
                              update_baseline=update_baseline, command="femcheck verify " + case_path, levels=levels,
                              mesh=mesh, jobs=jobs, progress=lambda desc: bar.update(task, advance=1, description=desc),
                              fe_baseline_path=fe_base if (check or update_baseline) else None, vtu=vtu,
-                             convergence_point=conv_point)
+                             convergence_point=conv_point, joint_fe=joint_fe)
         from rich.table import Table
 
         def show(title, rows):
@@ -83,10 +88,13 @@ def register(app: typer.Typer) -> None:
             show(f"simplified vs detailed analytical model, {joints} joints (relative error %)", error_rows(run.analytical, joints))
         if run.fe is not None:
             for lvl in run.fe.levels:
-                rows = fe_error_rows(run.analytical, run.fe, lvl)
-                for joints in ("rigid", "released"):
-                    show(f"{lvl} analytical vs {lvl} FE, {joints} joints (relative error %, mesh {mesh})",
-                         error_table(rows, joints, run.fe.directions))
+                variants = ["contact", None] if lvl == "detailed" and has_contact_joints(run.fe) else [None]
+                for fe_joints in variants:
+                    rows = fe_error_rows(run.analytical, run.fe, lvl, fe_joints)
+                    for joints in ("rigid", "released"):
+                        what = f"{joints} joints" if fe_joints is None else f"{joints} analytical vs contact-joint FE"
+                        show(f"{lvl} analytical vs {lvl} FE, {what} (relative error %, mesh {mesh})",
+                             error_table(rows, joints, run.fe.directions))
             ts = run.fe.timings_s
             con.print(f"FE: meshing {ts['meshing']:.1f} s, assembly {ts['assembly']:.1f} s, solve {ts['solve']:.1f} s "
                       f"(summed over solves), platform/loads {ts['platform']:.1f} s, wall {ts['wall']:.1f} s")

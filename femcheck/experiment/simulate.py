@@ -81,15 +81,21 @@ def protocol_rows(case, directions=ALL_DIRECTIONS, trials: int | None = None, sw
 
 def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level: str = "detailed",
              joints: str | None = None, trials: int | None = None, sweep: bool = True,
-             noise_sigma_m: float | None = None, resolution_m: float | None = None) -> VirtualExperiment:
+             noise_sigma_m: float | None = None, resolution_m: float | None = None,
+             model=None) -> VirtualExperiment:
     """Simulate the protocol with hidden effects.
 
     hidden: sequence of (effect id, {param: value}); an empty dict draws a random magnitude and location
-    (``Effect.sample_truth``) from the seeded generator. Returns a :class:`VirtualExperiment`.
+    (``Effect.sample_truth``) from the seeded generator. ``model``: the reading model the data come from
+    (default the analytical chain of ``level`` and ``joints``; e.g. the device FE with contact joints,
+    :class:`femcheck.diagnose.fe_model.DeviceFEReadingModel`). Returns a :class:`VirtualExperiment`.
     """
     rng = np.random.default_rng(seed)
     joints = joints or case.model.joint_rotations
-    model = AnalyticalChainModel(case, level, joints)
+    if model is None:
+        model = AnalyticalChainModel(case, level, joints)
+    else:
+        level, joints = getattr(model, "level", level), model.joints
     sigma = case.measurement.noise_sigma_m if noise_sigma_m is None else noise_sigma_m
     res = case.measurement.dial_resolution_m if resolution_m is None else resolution_m
     effs, vals, truth_effects = [], [], []
@@ -121,7 +127,8 @@ def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level
     text = format_measured_csv(point, direction, trial, phase, load, force, d_read, resolution_m=res)
     from femcheck.measured.csv_format import parse_measured_csv
     data = parse_measured_csv(text, "<virtual experiment>")
-    truth = {"case": case.source, "case_sha256": case.sha256, "model": level, "joints": joints, "seed": seed,
+    truth = {"case": case.source, "case_sha256": case.sha256, "model": level, "joints": joints,
+             "source": model.name, "seed": seed,
              "effects": truth_effects or [{"id": "none", "params": {}, "location": ""}],
              "noise_sigma_m": sigma, "dial_resolution_m": res, "trials": int(trials or case.measurement.trials),
              "directions": list(directions), "sweep": bool(sweep)}

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from femcheck.fe_device.joints import IDEALIZATIONS, LEVELS
+from femcheck.fe_device.joints import FE_JOINTS, LEVELS
 from femcheck.fe_device.loads import LoadCaseResult, load_case
 from femcheck.fe_device.parts import SuperElement, guideway_element, link_element
 from femcheck.fe_device.substructure import platform_matrices
@@ -80,16 +80,25 @@ class PointResult:
     seconds: float
 
 
-def solve_point(case, model: PointModel, levels=LEVELS, joints=IDEALIZATIONS, directions=None) -> PointResult:
-    """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`)."""
+def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, directions=None,
+                friction=None) -> PointResult:
+    """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`).
+
+    ``contact`` joints exist at the detailed level only; ``friction`` (:class:`.joint_friction.JointFriction`)
+    defaults to the case's, with the theoretical tilt slip ratio 1.
+    """
     from femcheck.chain import device_parameters
+    from femcheck.fe_device.joint_friction import joint_friction
     t0 = time.perf_counter()
     params = device_parameters(case)
+    friction = friction or joint_friction(case)
     directions = tuple(directions or case.loads.directions)
     out: dict[tuple, LoadCaseResult] = {}
     for lvl in levels:
         for j in joints:
+            if j == "contact" and lvl != "detailed":
+                continue
             for d in directions:
                 out[(lvl, j, d)] = load_case(case, model.K_lg, model.link.K, model.R_A, model.R_B, model.G,
-                                             lvl, j, d, params)
+                                             lvl, j, d, params, friction)
     return PointResult(model.point, out, time.perf_counter() - t0)

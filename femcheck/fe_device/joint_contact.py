@@ -44,17 +44,30 @@ class JointContactResult:
         return float((self.delta_fe_m[i20] - self.delta_fe_m[i5]) / (self.delta_hertz_m[i20] - self.delta_hertz_m[i5]))
 
 
-def spherical_joint_contact(case, size_m: float | None = None, loads=LOADS_N, penalty_factor: float = 100.0) -> JointContactResult:
-    """Solve the ball-on-seat contact under ``loads`` (N, ascending) and compare with Hertz (module doc)."""
+@dataclasses.dataclass(frozen=True)
+class _BallSeatModel:
+    """Assembled ball-on-seat contact model: stiffness, reference node B (6 DOFs), base constraints, pair."""
+
+    K: object
+    ndof: int
+    ref: np.ndarray
+    base_constraints: object
+    pair: object
+    E_star: float
+    R_star: float
+    dofs: int
+    cap_points: np.ndarray
+    cap_dofs: np.ndarray
+
+
+def _ball_seat_model(case, size_m, *, friction: float, penalty_factor: float) -> _BallSeatModel:
+    """Mesh, stiffness, seat clamp, ball-cap coupling to B and the contact pair (module doc)."""
     from femcheck.compliance.hertz_point_contact import effective_modulus, effective_radius
     from femcheck.fe import constraints as cs
     from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
-    from femcheck.fe.newton import ContactProblem, solve_contact
-    from femcheck.fe_device.loads import hertz_approach
     from geometry import spherical_joint
 
-    t0 = time.perf_counter()
     sj = case.spherical_joint
     pm = spherical_joint.build(case, size_m, seat="flat")
     mesh = pm.to_skfem()
@@ -67,23 +80,109 @@ def spherical_joint_contact(case, size_m: float | None = None, loads=LOADS_N, pe
     ndof, ref = cs.append_reference_nodes(basis.N, 1)
     ref = ref[0]
     pts, trip = dof_triplets(basis, basis.get_dofs("sj_ball_link").all())
-    con = cs.combine(cs.clamp(ndof, basis.get_dofs("sj_seat_mount").all()),
-                     cs.rigid_coupling(ndof, ref, np.zeros(3), pts, trip),
-                     cs.clamp(ndof, ref[[0, 1, 3, 4, 5]]))
+    base = cs.combine(cs.clamp(ndof, basis.get_dofs("sj_seat_mount").all()),
+                      cs.rigid_coupling(ndof, ref, np.zeros(3), pts, trip))
     slave, master = mesh.boundaries["sj_seat_contact"], mesh.boundaries["sj_ball_contact"]
     eps = default_penalty(mesh, slave, sj.seat_material.E_Pa, penalty_factor)
-    pair = pair_surfaces(basis, slave, master, penalty_n=eps, friction=0.0, name="sj", ndof=ndof)
-    Fmax = max(loads)
-    f = np.zeros(ndof)
-    f[ref[2]] = -Fmax
-    problem = ContactProblem(K=K, f=f, constraints=con, pairs=(pair,))
+    pair = pair_surfaces(basis, slave, master, penalty_n=eps, friction=friction, name="sj", ndof=ndof)
     Es = float(effective_modulus(sj.ball_material.E_Pa, sj.ball_material.nu, sj.seat_material.E_Pa, sj.seat_material.nu))
     Rs = float(effective_radius(sj.ball_radius_m, sj.seat_curvature_1_per_m))
-    dh = hertz_approach(np.asarray(loads, float), Es, Rs)
+    return _BallSeatModel(K, ndof, ref, base, pair, Es, Rs, int(basis.N), pts, trip)
+
+
+def spherical_joint_contact(case, size_m: float | None = None, loads=LOADS_N, penalty_factor: float = 100.0) -> JointContactResult:
+    """Solve the ball-on-seat contact under ``loads`` (N, ascending) and compare with Hertz (module doc)."""
+    from femcheck.fe import constraints as cs
+    from femcheck.fe.newton import ContactProblem, solve_contact
+    from femcheck.fe_device.loads import hertz_approach
+
+    t0 = time.perf_counter()
+    m = _ball_seat_model(case, size_m, friction=0.0, penalty_factor=penalty_factor)
+    ref = m.ref
+    con = cs.combine(m.base_constraints, cs.clamp(m.ndof, ref[[0, 1, 3, 4, 5]]))
+    Fmax = max(loads)
+    f = np.zeros(m.ndof)
+    f[ref[2]] = -Fmax
+    problem = ContactProblem(K=m.K, f=f, constraints=con, pairs=(m.pair,))
+    dh = hertz_approach(np.asarray(loads, float), m.E_star, m.R_star)
     # penetration accepted: 0.1 % of the smallest Hertz approach (the compared quantity)
-    res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=max(float(pair.g0.min()), 0.0) + 1e-12,
+    res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=max(float(m.pair.g0.min()), 0.0) + 1e-12,
                         penetration_tol=1e-3 * float(dh.min()))
     delta = np.array([-s.u[ref[2]] for s in res.steps])
     return JointContactResult(tuple(float(F) for F in loads), delta, dh, int(con.nfree),
                               int(sum(res.iterations_per_step)), time.perf_counter() - t0)
 
+
+@dataclasses.dataclass(frozen=True)
+class JointTiltResult:
+    """Moment–rotation of the ball in its seat under proportional loading (SI).
+
+    ``load_factors`` (n,); ``normal_force_N`` (n,) contact force; ``rotation_rad`` (n,) imposed tilt of B
+    about x; ``moment_Nm`` (n,) reaction moment about x at B; ``friction`` μ; ``ball_radius_m`` R;
+    ``slip_fraction`` (n,) share of the closed contact points that slide; ``dofs``, ``iterations``,
+    ``seconds``.
+    """
+
+    load_factors: np.ndarray
+    normal_force_N: np.ndarray
+    rotation_rad: np.ndarray
+    moment_Nm: np.ndarray
+    friction: float
+    ball_radius_m: float
+    slip_fraction: np.ndarray
+    dofs: int
+    iterations: int
+    seconds: float
+
+    @property
+    def slip_radius_ratio(self) -> np.ndarray:
+        """|M| / (μ N R): 1 when the whole contact slides (the moment is μ N R), < 1 while parts stick."""
+        return np.abs(self.moment_Nm) / (self.friction * self.normal_force_N * self.ball_radius_m)
+
+    @property
+    def secant_stiffness_Nm_per_rad(self) -> np.ndarray:
+        return np.abs(self.moment_Nm) / np.abs(self.rotation_rad)
+
+
+def spherical_joint_tilt(case, normal_force_N: float, rotation_rad: float, *, friction: float,
+                         size_m: float | None = None, load_steps=(0.25, 0.5, 0.75, 1.0),
+                         penalty_factor: float = 100.0) -> JointTiltResult:
+    """Tilt the ball about x through B while pressing it into the seat, both in proportion (N, rad).
+
+    This is how a joint of the device is loaded under a monotonic TCP load: its force and its rotation
+    grow together. B's lateral translations are held (the leg holds the ball centre), the force
+    ``normal_force_N`` acts along −z (into the seat) and the tilt θ_x is imposed; Coulomb friction μ acts
+    in the contact (penalty + augmented Lagrangian, :mod:`femcheck.fe.contact.coulomb_friction`).
+
+    Physics: frictionless contact forces on a sphere are normal to it and pass through its centre, so the
+    joint carries no moment about B; with friction the contact point (at distance R from B) resists the
+    tilt with a tangential force ≤ μ N, so the moment is bounded by the slip moment μ N R; below it the
+    contact sticks (Mindlin tangential stiffness, rotational stiffness ≈ 8 G* a R²).
+    """
+    from femcheck.fe import constraints as cs
+    from femcheck.fe.newton import ContactProblem, solve_contact
+    from femcheck.fe_device.loads import hertz_approach
+
+    t0 = time.perf_counter()
+    m = _ball_seat_model(case, size_m, friction=friction, penalty_factor=penalty_factor)
+    ref = m.ref
+    con = cs.combine(m.base_constraints, cs.clamp(m.ndof, ref[[0, 1, 4, 5]]),
+                     cs.clamp(m.ndof, ref[[3]], values=float(rotation_rad)))
+    f = np.zeros(m.ndof)
+    f[ref[2]] = -float(normal_force_N)
+    problem = ContactProblem(K=m.K, f=f, constraints=con, pairs=(m.pair,))
+    dh = float(hertz_approach(normal_force_N * min(load_steps), m.E_star, m.R_star))
+    res = solve_contact(problem, list(load_steps), initial_closure=max(float(m.pair.g0.min()), 0.0) + 1e-12,
+                        penetration_tol=1e-3 * dh, max_iter=120)
+    from femcheck.fe.contact import status as st
+    lf = np.array([s.load_factor for s in res.steps])
+    N = np.array([s.pairs[0].force(m.pair) for s in res.steps])
+    # moment about B that the ball cap exerts on the link: Σ r_i × (reaction at cap node i), x component
+    M = np.array([np.cross(m.cap_points, res.reactions(problem, k)[m.cap_dofs]).sum(axis=0)[0]
+                  for k in range(len(res.steps))])
+    slip = []
+    for s in res.steps:
+        closed = s.pairs[0].status != st.OPEN
+        slip.append(float(np.mean(s.pairs[0].status[closed] == st.SLIDE)) if closed.any() else 0.0)
+    return JointTiltResult(lf, N, lf * float(rotation_rad), M, float(friction), float(case.spherical_joint.ball_radius_m),
+                           np.array(slip), int(con.nfree), int(sum(res.iterations_per_step)), time.perf_counter() - t0)

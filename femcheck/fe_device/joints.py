@@ -16,6 +16,10 @@ uj         B_i (z = u_i)    translations tied / springs (K_UC, K_UC, 1/(1/K_UC +
                             rotations tied (``rigid``) or free about x_B = a1, y_B = a2 (``released``)
 =========  ===============  ===================================================================
 
+The detailed FE also has ``contact`` joints (:data:`FE_JOINTS`): the joints as the contact FE of each
+joint alone finds them — translations as above, the rotations that an ideal joint releases (sp: all
+three, uj: a1 and a2) carry the frictional stick/slip law of :mod:`.joint_friction` as secant springs.
+
 (x_B = unit(z x u_i) is the a1 of CONVENTIONS.md §5 at the test points, y_B = u_i x a1 = a2.)
 """
 from __future__ import annotations
@@ -26,6 +30,9 @@ import numpy as np
 
 LEVELS = ("simplified", "detailed")
 IDEALIZATIONS = ("rigid", "released")
+#: joint settings of the FE: the two analytical idealizations, and the frictional contact joints
+#: (detailed level only)
+FE_JOINTS = IDEALIZATIONS + ("contact",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,16 +59,19 @@ class JointLayout:
 
 
 def joint_layout(level: str, joints: str) -> JointLayout:
-    """The :class:`JointLayout` of ``level`` ('simplified' | 'detailed') and ``joints`` ('rigid' | 'released')."""
+    """The :class:`JointLayout` of ``level`` ('simplified' | 'detailed') and ``joints`` ('rigid' | 'released' | 'contact')."""
     if level not in LEVELS:
         raise ValueError(f"level = {level!r}; expected one of {', '.join(LEVELS)}")
-    if joints not in IDEALIZATIONS:
-        raise ValueError(f"joints = {joints!r}; expected one of {', '.join(IDEALIZATIONS)}")
+    if joints not in FE_JOINTS:
+        raise ValueError(f"joints = {joints!r}; expected one of {', '.join(FE_JOINTS)}")
     detailed = level == "detailed"
+    if joints == "contact" and not detailed:
+        raise ValueError("joints = 'contact' exists for the detailed level only (the simplified level has no joint model)")
     released = joints == "released"
+    contact = joints == "contact"
     act_springs = (2,) if detailed else ()
-    sp_springs = (0, 1, 2) if detailed else ()
-    uj_springs = (0, 1, 2) if detailed else ()
+    sp_springs = (0, 1, 2, 3, 4, 5) if contact else (0, 1, 2) if detailed else ()
+    uj_springs = (0, 1, 2, 3, 4) if contact else (0, 1, 2) if detailed else ()
     sp_free = (3, 4, 5) if released else ()
     uj_free = (3, 4) if released else ()
     return JointLayout(level, joints, act=act_springs, sp=sp_springs + sp_free, uj=uj_springs + uj_free,

@@ -9,6 +9,10 @@
   its leg transmits (the secant of a nonlinear elastic spring reproduces its force at that state):
   start from the tangent stiffness at F_min, iterate until the largest relative change of k is < 1e-10.
   Actuation (1/c_act) and the U-joint (K_UC, K_UB) springs are linear.
+* detailed level, ``contact`` joints: the same, plus the frictional rotation springs of the joints
+  (:mod:`.joint_friction`, secant stiffness min(k_stick, M_slip(F_i) / |r|)) in the same fixed point;
+  each of the two load states is reached by monotonic proportional loading from zero, which is what
+  makes the secant (deformation-theory) form of the stick/slip law exact (see that module).
 
 The analytical detailed model instead uses the *tangent* stiffness at the force of the test load alone
 (CONVENTIONS.md §6); the two differ in the spherical-joint term only (measured in docs/verify.md).
@@ -45,6 +49,12 @@ def hertz_approach(F, E_star, R_star):
     return (3.0 * np.asarray(F, float) / (4.0 * E_star * np.sqrt(R_star))) ** (2.0 / 3.0)
 
 
+def _relative_change(new, old) -> float:
+    """max |new - old| / max(|new|, |old|) (0 where both vanish: a frictionless joint's zero spring)."""
+    scale = np.maximum(np.abs(new), np.abs(old))
+    return float(np.max(np.where(scale > 0, np.abs(new - old) / np.where(scale > 0, scale, 1.0), 0.0)))
+
+
 @dataclasses.dataclass(frozen=True)
 class LoadState:
     """Equilibrium of one point under one TCP wrench: ``twist`` (6,), ``u_C`` (6, 6) platform-point twists,
@@ -59,10 +69,11 @@ class LoadState:
     legs: object
 
 
-def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params) -> LoadState:
+def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params, friction=None) -> LoadState:
     """Equilibrium under ``wrench`` (6,) for 6 legs (K_lg (6, 6, 6), R_A, R_B (6, 3, 3), G (6, 6, 6)).
 
-    ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses.
+    ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses;
+    ``friction``: :class:`femcheck.fe_device.joint_friction.JointFriction` (``contact`` joints only).
     """
     layout = joint_layout(level, joints)
     if level == "simplified":
@@ -75,16 +86,38 @@ def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, para
     k_uj = np.tile([1.0 / c_uc, 1.0 / c_uc, 1.0 / (c_uc + c_ub)], (6, 1))
     Es, Rs, Fmin = (float(np.squeeze(v)) for v in (params.E_star_sp, params.R_star_sp, params.F_min_sp))
     k_sp = np.full(6, (6.0 * Es**2 * Rs * Fmin) ** (1.0 / 3.0))
+    contact = joints == "contact"
+    if contact:
+        if friction is None:
+            raise ValueError("contact joints need the joint friction data (femcheck.fe_device.joint_friction)")
+        k_rot_sp, k_rot_uj = friction.stick_stiffness(np.full(6, Fmin))[0:2], None
+        k_rot_sp = np.stack([k_rot_sp[0], k_rot_sp[0], k_rot_sp[1]], axis=1)
+        k_rot_uj = np.repeat(friction.stick_stiffness(np.full(6, Fmin))[2][:, None], 2, axis=1)
+
+    def springs(k_sp):
+        if not contact:
+            return k_sp, k_uj
+        return (np.hstack([np.repeat(k_sp[:, None], 3, axis=1), k_rot_sp]), np.hstack([k_uj, k_rot_uj]))
+
     for it in range(1, MAX_ITERATIONS + 1):
-        legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=k_sp, k_uj=k_uj)
+        ks, ku = springs(k_sp)
+        legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=ks, k_uj=ku)
         t, uC = solve_platform(legs.K, G, wrench)
         f = np.linalg.norm(np.einsum("iab,ib->ia", legs.K, uC)[:, :3], axis=1)
         F = np.maximum(f, Fmin)
         k_new = F / hertz_approach(F, Es, Rs)
         change = np.max(np.abs(k_new - k_sp) / k_sp)
         k_sp = k_new
+        if contact:
+            q = legs.interior(uC)["q"]
+            r_sp = q[:, legs.blocks["sp"]][:, 3:6]
+            r_uj = q[:, legs.blocks["uj"]][:, 3:5]
+            new_sp, new_uj = friction.secant_stiffness(F, r_sp, r_uj)
+            change = max(change, _relative_change(new_sp, k_rot_sp), _relative_change(new_uj, k_rot_uj))
+            k_rot_sp, k_rot_uj = new_sp, new_uj
         if change < FIXED_POINT_RTOL:
-            legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=k_sp, k_uj=k_uj)
+            ks, ku = springs(k_sp)
+            legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=ks, k_uj=ku)
             t, uC = solve_platform(legs.K, G, wrench)
             return LoadState(t, uC, f, k_sp, it, legs)
     raise ConvergenceError(f"Hertz secant fixed point did not converge in {MAX_ITERATIONS} iterations "
@@ -109,7 +142,8 @@ class LoadCaseResult:
     states: tuple
 
 
-def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, direction: str, params) -> LoadCaseResult:
+def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, direction: str, params,
+              friction=None) -> LoadCaseResult:
     """Apply the protocol of ``level`` along ``direction`` and return the deflection (module docstring)."""
     d = direction_unit(direction)
     L = case.loads
@@ -120,8 +154,10 @@ def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, directio
         inc = s.legs.interior(s.u_C)["energy"]
     else:
         P = L.detailed_test_N
-        sp_ = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[L.detailed_preload_N * d, 0, 0, 0], level, joints, params)
-        st = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[(L.detailed_preload_N + P) * d, 0, 0, 0], level, joints, params)
+        sp_ = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[L.detailed_preload_N * d, 0, 0, 0], level, joints, params,
+                          friction)
+        st = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[(L.detailed_preload_N + P) * d, 0, 0, 0], level, joints,
+                         params, friction)
         states, twist = (sp_, st), st.twist - sp_.twist
         inc = st.legs.interior(st.u_C - sp_.u_C)["energy"]
     e = inc.sum(axis=0)

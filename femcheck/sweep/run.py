@@ -1,7 +1,9 @@
 """A whole sweep, as ``femcheck sweep`` runs it: design -> keys -> skip finished -> tasks -> store.
 
 :func:`run_sweep` is generic over the per-chunk task function (``TASK_FUNCTIONS`` maps a model to
-it); FE samples plug in as one more entry once the whole-device FE verification exists.
+it). The analytical models go in chunks of about :data:`CHUNK_SAMPLE_POINTS` sample-points
+(:mod:`femcheck.sweep.evaluate_analytical`); ``model = "fe"`` solves the whole-device FE model, one
+sample per task (:mod:`femcheck.sweep.evaluate_fe`), so the workers share the FE samples.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import numpy as np
 from femcheck.errors import CaseError, FemcheckError
 from femcheck.sweep.design import Design, make_design
 from femcheck.sweep.evaluate_analytical import AnalyticalTask, run_analytical_task
+from femcheck.sweep.evaluate_fe import FE_LEVELS, FETask, fe_code_version, run_fe_task
 from femcheck.sweep.executor import SweepInterrupted, run_tasks, scheduler_address
 from femcheck.sweep.parameters import ParameterRange
 from femcheck.sweep.store import SweepStore, code_version, sample_keys, software_versions
@@ -23,10 +26,12 @@ from femcheck.sweep.store import SweepStore, code_version, sample_keys, software
 log = logging.getLogger(__name__)
 
 #: model -> per-chunk task function (picklable, top level)
-TASK_FUNCTIONS = {"simplified": run_analytical_task, "detailed": run_analytical_task}
+TASK_FUNCTIONS = {"simplified": run_analytical_task, "detailed": run_analytical_task, "fe": run_fe_task}
 MODELS = ("simplified", "detailed", "fe")
 #: target size of one task, in sample-points (a few seconds of the detailed model)
 CHUNK_SAMPLE_POINTS = 20_000
+#: samples per task of an FE sweep (one FE sample takes seconds to minutes: one per task balances best)
+FE_CHUNK_SAMPLES = 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,13 +64,16 @@ def _utc() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
-def preflight(case, out_dir, *, model: str, joints: str | None, resume: bool) -> None:
+def preflight(case, out_dir, *, model: str, joints: str | None, resume: bool,
+              fe_level: str = "detailed", mesh: str = "coarse") -> None:
     """The checks :func:`run_sweep` makes before any work (the CLI calls it before its progress bar)."""
-    if model == "fe":
-        raise FemcheckError("--model fe: FE sweeps need the whole-device FE verification (`femcheck verify`), "
-                            "which is not available yet; use --model simplified or --model detailed")
+    from femcheck.fe_device.mesh_levels import MESH_LEVELS
     if model not in TASK_FUNCTIONS:
         raise CaseError("--model", model, f"expected one of {list(MODELS)}")
+    if model == "fe" and fe_level not in FE_LEVELS:
+        raise CaseError("--fe-level", fe_level, f"expected one of {list(FE_LEVELS)}")
+    if model == "fe" and mesh not in MESH_LEVELS:
+        raise CaseError("--mesh", mesh, f"expected one of {list(MESH_LEVELS)}")
     if (joints or case.model.joint_rotations) not in ("rigid", "released"):
         raise CaseError("--joints", joints, "expected rigid or released")
     if SweepStore(out_dir).has_results() and not resume:
@@ -73,18 +81,30 @@ def preflight(case, out_dir, *, model: str, joints: str | None, resume: bool) ->
                             "or choose another --out")
 
 
+def _task(case, keys, kinds, values, sample_ids, skeys, *, model, joints, points, fe_level, mesh):
+    """The task object of one chunk for ``model`` (:class:`FETask` for "fe", else :class:`AnalyticalTask`)."""
+    if model == "fe":
+        return FETask(case=case, keys=keys, kinds=kinds, values=values, sample_ids=sample_ids, sample_keys=skeys,
+                      level=fe_level, joints=joints, points=points, mesh=mesh)
+    return AnalyticalTask(case=case, keys=keys, kinds=kinds, values=values, sample_ids=sample_ids, sample_keys=skeys,
+                          model=model, joints=joints, points=points)
+
+
 def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs", samples: int | None = None,
               seed: int = 0, model: str = "detailed", joints: str | None = None, points=None,
               scheduler: str | None = None, jobs: int | None = None, resume: bool = False,
-              chunk_samples: int | None = None, task_fn=None, on_progress=None) -> SweepOutcome:
+              chunk_samples: int | None = None, task_fn=None, on_progress=None, fe_level: str = "detailed",
+              mesh: str = "coarse") -> SweepOutcome:
     """Run (or resume) a sweep of ``case`` over ``ranges`` into ``out_dir``; see docs/sweep.md.
 
     ``points``: tuple of labels (default: the cube P0..P8); ``jobs``: local worker processes (0 = in
     this process; default the CPU count); ``scheduler``: Dask address (or ``$FEMCHECK_SCHEDULER``);
-    ``chunk_samples``: samples per task (default about :data:`CHUNK_SAMPLE_POINTS` sample-points);
-    ``task_fn``: replaces the model's task function (tests, future FE).
+    ``chunk_samples``: samples per task (default about :data:`CHUNK_SAMPLE_POINTS` sample-points for the
+    analytical models, :data:`FE_CHUNK_SAMPLES` for FE); ``task_fn``: replaces the model's task function
+    (tests); ``fe_level`` ("simplified" | "detailed") and ``mesh`` ("coarse" | "default" | "fine"): the FE
+    level and mesh level of ``model = "fe"`` (ignored otherwise).
     """
-    preflight(case, out_dir, model=model, joints=joints, resume=resume)
+    preflight(case, out_dir, model=model, joints=joints, resume=resume, fe_level=fe_level, mesh=mesh)
     joints = joints or case.model.joint_rotations
     points = tuple(points) if points else parse_points("cube")
     store = SweepStore(out_dir)
@@ -92,6 +112,8 @@ def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs
     des = make_design(ranges, design, samples, seed)
     keys = tuple(r.key for r in ranges)
     options = {"model": model, "joints": joints, "points": list(points), "directions": list(case.loads.directions)}
+    if model == "fe":  # only for FE, so the keys of analytical sweeps stored before FE sweeps existed still match
+        options.update({"fe_level": fe_level, "mesh": mesh, "fe_code": fe_code_version()})
     version = code_version()
     skeys = sample_keys(case.sha256, keys, des.values, options, version)
     done = store.finished_keys() if resume else set()
@@ -114,6 +136,8 @@ def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs
     store.write_design(design_cols)
 
     address = scheduler_address(scheduler)
+    if chunk_samples is None and model == "fe":
+        chunk_samples = FE_CHUNK_SAMPLES
     if chunk_samples is None:
         chunk_samples = max(1, CHUNK_SAMPLE_POINTS // n_pts)
         if not address:  # at least ~4 tasks per local worker for balance, when there is enough work
@@ -121,8 +145,8 @@ def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs
             workers = 1 if jobs == 0 else (jobs or os.cpu_count() or 1)
             chunk_samples = max(1, min(chunk_samples, math.ceil(len(todo) / (4 * max(workers, 1)))))
     kinds = tuple(r.kind for r in ranges)
-    tasks = [AnalyticalTask(case=case, keys=keys, kinds=kinds, values=des.values[idx], sample_ids=idx,
-                            sample_keys=tuple(skeys[i] for i in idx), model=model, joints=joints, points=points)
+    tasks = [_task(case, keys, kinds, des.values[idx], idx, tuple(skeys[i] for i in idx), model=model, joints=joints,
+                   points=points, fe_level=fe_level, mesh=mesh)
              for idx in (todo[s:s + chunk_samples] for s in range(0, len(todo), chunk_samples))]
     log.info("sweep: %d samples x %d points, %d to evaluate in %d tasks", des.m, n_pts, len(todo), len(tasks))
 
