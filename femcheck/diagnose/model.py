@@ -6,8 +6,8 @@ after that call: they change the effective force (friction), the compliance of e
 actuation, links, legs), the joint idealization, or the reading itself (clearance, dial misalignment).
 
 :class:`AnalyticalChainModel` is the compliance-chain model of seed 000 (``femcheck.chain.evaluate``).
-An FE-backed model can be plugged in later by implementing the same ``tcp_displacement`` signature
-(``element_scale`` would then scale the moduli / contact penalties of the FE parts of each chain).
+The device FE with contact joints plugs in through the same ``tcp_displacement`` signature
+(:class:`femcheck.diagnose.fe_model.DeviceFEReadingModel`, nominal model only).
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ LG, ACT, SP, PROX, UJ = (ELEMENTS.index(e) for e in ("lg", "act", "sp", "prox", 
 
 
 class ReadingModel(Protocol):
-    """What a diagnosis needs from a stiffness model (analytical now, FE later)."""
+    """What a diagnosis needs from a stiffness model (analytical chain or device FE)."""
 
     name: str
     joints: str
