@@ -1,14 +1,19 @@
 """Watertight surface (trimesh primitives, booleans with the manifold3d engine) -> tetrahedra (pytetwild).
 
-Used for bodies that are not extrusions (the ball of the spherical joint). The target edge length may
+Used only where a part asks for it (``refinement = "sizing_field"`` of the spherical joint, kept for
+comparison); the default ball is the structured cubed sphere of geometry.structured. The target edge length may
 vary in space: a sizing field h(x) is sampled on a background box mesh and handed to fTetWild
 (``bg_vertices/bg_tets/bg_values``), so elements are fine (h_contact) at the contact point and grow
 linearly with the distance d from it: h(d) = min(h, h_contact + g d) with grading g.
 
-fTetWild's optimizer is not bit-reproducible between runs (measured: same node count, coordinates
-differing by up to 0.1 mm on a 3.5 mm ball; see docs/geometry.md), so reproducibility of such bodies
-comes from the on-disk cache (geometry.cache) keyed by the parameters: the same parameters always load
-the same mesh. Structured bodies (geometry.structured) are deterministic without the cache.
+fTetWild's optimizer is not bit-reproducible between runs, and one thread does not make it so: with
+``num_threads=1`` and ``OMP_NUM_THREADS=1``, two runs in fresh processes gave 1843 and 1758 nodes (the
+1.5 mm ball with its sizing field), and two calls in one process on a uniform 1.5 mm icosphere ball gave
+3005 and 3020 nodes. pytetwild has no seed argument and the library links ``std::random_device``.
+Without the optimizer the output repeats (up to the vertex order in each tet) but has degenerate tets
+(docs/geometry.md).
+Reproducibility of such bodies therefore comes only from the on-disk cache (geometry.cache) keyed by the
+parameters. Structured bodies (geometry.structured) are deterministic without the cache.
 """
 from __future__ import annotations
 

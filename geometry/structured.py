@@ -218,3 +218,130 @@ def n_around(radius: float, h: float, minimum: int = 48) -> int:
     """Angular node count on a circle of ``radius`` for edge length about h; at least ``minimum`` so that
     the polygon area is within (2 pi / n)^2 / 6 = 0.29 % (n = 48) of the circle's."""
     return max(minimum, int(math.ceil(TWO_PI * radius / h)))
+
+
+# -- ball: cubed sphere with refining transition layers ----------------------------------------------
+def prism_tets(tris: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Tetrahedra of the prisms between a triangulated layer and the next one (same triangles).
+
+    tris : (k, 3) local node indices of the layer; lo, hi : local index -> node id in the lower / upper layer.
+    Each prism is split into three tetrahedra by the global-index rule on the *local* index (the diagonal of
+    a side quad starts at its lower-index bottom node), so neighbouring prisms agree on every side quad.
+    Orientation is not fixed here (see :func:`orient_positive`)."""
+    s = np.sort(tris, axis=1)
+    A, B, C = s[:, 0], s[:, 1], s[:, 2]
+    A0, B0, C0, A1, B1, C1 = lo[A], lo[B], lo[C], hi[A], hi[B], hi[C]
+    return np.vstack([np.stack([A0, B0, C0, C1], 1), np.stack([A0, B0, B1, C1], 1), np.stack([A0, A1, B1, C1], 1)])
+
+
+def red_refine(tris: np.ndarray, n_nodes: int):
+    """Split every triangle (local indices < n_nodes) into four at its edge midpoints.
+
+    Returns (edges (e, 2) sorted node pairs, mids (k, 3) local index of the midpoint of edges 01, 12, 20 of
+    each triangle (n_nodes + edge number), fine triangles (4 k, 3) with the orientation of their parent)."""
+    k = len(tris)
+    e = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    edges, inv = np.unique(e, axis=0, return_inverse=True)
+    inv = np.asarray(inv).ravel()
+    m01, m12, m20 = n_nodes + inv[:k], n_nodes + inv[k:2 * k], n_nodes + inv[2 * k:]
+    fine = np.vstack([np.stack([tris[:, 0], m01, m20], 1), np.stack([tris[:, 1], m12, m01], 1),
+                      np.stack([tris[:, 2], m20, m12], 1), np.stack([m01, m12, m20], 1)])
+    return edges, np.stack([m01, m12, m20], 1), fine
+
+
+def transition_tets(tris: np.ndarray, mids: np.ndarray, lo: np.ndarray, hi: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Tetrahedra of a 1:2 transition layer: each coarse triangle abc (ids ``lo``) below its red refinement
+    (ids ``hi``; ``mids`` from :func:`red_refine`) above. Seven tets per cell: three corner tets
+    (a, a', m_ab', m_ca') and the octahedron a b c | m_ab' m_bc' m_ca', split along its shortest
+    vertex-to-opposite-midpoint diagonal. Each side face (a, b | a', m_ab', b') is split as the fan from
+    m_ab', whichever cell it belongs to, so neighbouring cells conform."""
+    corners = [np.stack([lo[tris[:, i]], hi[tris[:, i]], hi[mids[:, i]], hi[mids[:, (i + 2) % 3]]], 1) for i in range(3)]
+    opposite = (1, 2, 0)  # vertex 0 faces the midpoint of edge 12, 1 of 20, 2 of 01
+    diag = np.stack([np.linalg.norm(points[lo[tris[:, i]]] - points[hi[mids[:, opposite[i]]]], axis=1) for i in range(3)], 1)
+    k = np.argmin(diag, axis=1)
+    rot = (k[:, None] + np.arange(3)[None]) % 3
+    a, b, c = (lo[np.take_along_axis(tris, rot[:, [j]], 1)[:, 0]] for j in range(3))
+    mab, mbc, mca = (hi[np.take_along_axis(mids, rot[:, [j]], 1)[:, 0]] for j in range(3))
+    octahedron = [np.stack([a, b, mab, mbc], 1), np.stack([a, mbc, mab, mca], 1), np.stack([a, c, mbc, mca], 1),
+                  np.stack([a, b, mbc, c], 1)]
+    return np.vstack(corners + octahedron)
+
+
+#: layers of the ball shell from the core surface (t = 0) to the sphere (t = 1): prism layer ("p") or
+#: 1:2 refining transition ("r"), each with the t where it ends. Chosen for the minimum dihedral angle
+#: (about 25 deg before contact refinement) at the fewest tetrahedra (docs/geometry.md).
+BALL_SHELL = (("p", 0.35), ("r", 0.6), ("p", 0.8), ("r", 1.0))
+
+
+def cubed_ball(radius: float, n_core: int, *, core_fraction: float = 0.4, inflate: float = 0.55,
+               shell=BALL_SHELL) -> tuple[np.ndarray, np.ndarray]:
+    """Structured tetrahedral mesh of the ball |x| <= radius (centre at the origin), deterministic.
+
+    Core: a box of half side ``core_fraction * radius`` with ``n_core`` cells per edge at equiangular
+    positions (a tan(xi)), split by :func:`box`, inflated toward a sphere by ``inflate`` (0: cube, 1: sphere)
+    so that the shell is not thin at the cube corners. Shell: the core's boundary triangles are carried
+    outward along the rays from the centre through ``shell`` (prism layers and 1:2 transition layers, see
+    :data:`BALL_SHELL`), so the surface has ``n_core * 2**(number of transitions)`` cells per cube-face
+    edge, every surface node lies exactly on the sphere (up to round-off), and the cubed-sphere face of -z
+    is centred on (0, 0, -radius). Returns (points (n, 3), tets (m, 4)) positively oriented; raises
+    ValueError if a tetrahedron would be degenerate or the mesh folds over itself."""
+    if n_core < 1:
+        raise ValueError(f"cubed_ball: n_core = {n_core}; expected >= 1")
+    a = core_fraction * radius
+    u = a * np.tan(np.linspace(-math.pi / 4, math.pi / 4, n_core + 1))
+    u[0], u[-1] = -a, a
+    if n_core % 2 == 0:
+        u[n_core // 2] = 0.0
+    pc, tc = box(u, u, u)
+    n_inf = np.abs(pc).max(axis=1)
+    n_2 = np.linalg.norm(pc, axis=1)
+    safe = np.where(n_2 > 0, n_2, 1.0)
+    pc = pc * np.where(n_2 > 0, (1.0 - inflate) + inflate * n_inf / safe, 1.0)[:, None]
+    tc = orient_positive(pc, tc)
+    from geometry.regions import boundary_facets
+    bf = boundary_facets(tc)
+    bnodes = np.unique(bf)
+    local = np.full(len(pc), -1)
+    local[bnodes] = np.arange(len(bnodes))
+    tris, base = local[bf], pc[bnodes]  # triangles of the core surface; their nodes (the rays' feet)
+
+    def layer(feet, t):
+        r0 = np.linalg.norm(feet, axis=1)
+        return (r0 + t * (radius - r0))[:, None] * (feet / r0[:, None])
+
+    points, tets = [pc], [tc]
+    lo, n_id = bnodes, len(pc)
+    for kind, t in shell:
+        if kind == "r":
+            edges, mids, fine = red_refine(tris, len(base))
+            base = np.vstack([base, 0.5 * (base[edges[:, 0]] + base[edges[:, 1]])])
+        hi = np.arange(n_id, n_id + len(base))
+        n_id += len(base)
+        points.append(layer(base, t))
+        if kind == "p":
+            tets.append(prism_tets(tris, lo, hi))
+        else:
+            tets.append(transition_tets(tris, mids, lo, hi, np.vstack(points)))
+            tris = fine
+        lo = hi
+    p, t = np.vstack(points), np.vstack(tets)
+    t = orient_positive(p, t)
+    check_covering(p, t, "cubed_ball")
+    return p, t
+
+
+def check_covering(points: np.ndarray, tets: np.ndarray, what: str = "mesh") -> None:
+    """Raise ValueError unless the (positively oriented) tets are non-degenerate and cover the solid bounded
+    by their boundary exactly once: the sum of their volumes equals the volume enclosed by the boundary
+    facets (divergence theorem). A folded or overlapping mesh fails the second test."""
+    from geometry.regions import boundary_facets
+    a, b, c, d = (points[tets[:, i]] for i in range(4))
+    vol = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) / 6.0
+    scale = float(np.abs(points).max()) ** 3
+    if np.any(vol <= 1e-14 * scale):
+        raise ValueError(f"{what}: {(vol <= 1e-14 * scale).sum()} degenerate tetrahedra")
+    f = boundary_facets(tets)
+    x, y, z = (points[f[:, i]] for i in range(3))
+    enclosed = float(np.einsum("ij,ij->i", x, np.cross(y, z)).sum() / 6.0)
+    if abs(vol.sum() - enclosed) > 1e-9 * max(abs(enclosed), scale):
+        raise ValueError(f"{what}: the tetrahedra fold over each other (volume {vol.sum():.6g} vs enclosed {enclosed:.6g})")

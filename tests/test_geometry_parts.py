@@ -1,6 +1,5 @@
 """Part meshes: watertight, volumes against closed forms, regions, contact sides facing each other,
-determinism, cache keys, errors. Coarse sizes keep the default run fast; default sizes of the slow
-(fTetWild) ball are in tests marked slow."""
+determinism, cache keys, errors. Coarse sizes keep the default run fast."""
 from __future__ import annotations
 
 import math
@@ -63,7 +62,6 @@ def test_volume_within_1pct_of_analytic_at_default_size(case, part):
         assert abs(q["volume_rel_error"]) < 0.01, (name, q["volume_rel_error"])
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("seat", ["flat", "socket"])
 def test_spherical_joint_volume_within_1pct_at_default_size(case, seat):
     m = build_part(with_params(case, **{"solid.spherical_joint.seat": seat}), "spherical_joint")
@@ -167,11 +165,48 @@ def test_two_runs_give_identical_meshes_without_cache(case, part):
 
 
 def test_two_runs_give_identical_spherical_joint_through_the_cache(case, coarse):
-    # the ball comes from fTetWild, whose optimizer is not bit-reproducible: the cache makes runs identical
     b = build_part(case, "spherical_joint", COARSE["spherical_joint"])
     a = coarse["spherical_joint"]
     assert a.cache_key == b.cache_key
     assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+
+
+def _assert_identical(a, b):
+    assert a.cache_key == b.cache_key
+    for name in ("points", "tets", "body_of_tet"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x, y), name  # bit-identical, no tolerance
+    assert a.bodies == b.bodies and list(a.regions) == list(b.regions)
+    for k in a.regions:
+        ra, rb = a.regions[k], b.regions[k]
+        assert np.array_equal(ra.facets, rb.facets) and np.array_equal(ra.nodes, rb.nodes), k
+        assert np.array_equal(ra.normals, rb.normals), k
+
+
+@pytest.mark.parametrize("link_direction", [(0.0, 0.0, 1.0), (0.6, 0.0, 0.8)])
+def test_two_cold_spherical_joint_builds_are_bit_identical(case, link_direction):
+    # issue acceptance: two runs produce identical meshes without the cache (structured cubed-sphere ball;
+    # the former fTetWild ball differed between runs, docs/geometry.md)
+    from geometry import spherical_joint
+    a = spherical_joint.build(case, COARSE["spherical_joint"], link_direction=link_direction, use_cache=False)
+    b = spherical_joint.build(case, COARSE["spherical_joint"], link_direction=link_direction, use_cache=False)
+    _assert_identical(a, b)
+    assert a.parameters["refinement"] == "structured"
+
+
+def test_changing_a_spherical_joint_parameter_changes_mesh_and_cache_key(case, coarse):
+    a = coarse["spherical_joint"]
+    R2 = 0.004
+    b = build_part(with_params(case, **{"spherical_joint.ball_radius_m": R2}), "spherical_joint", COARSE["spherical_joint"], use_cache=False)
+    assert a.cache_key != b.cache_key
+    ball = b.body_index("ball")
+    from geometry.regions import boundary_facets
+    surf = np.unique(boundary_facets(b.tets[b.body_of_tet == ball]))
+    assert np.allclose(np.linalg.norm(b.points[surf], axis=1), R2, rtol=1e-12, atol=0)  # nodes on the new sphere
+    c = build_part(with_params(case, **{"solid.spherical_joint.contact_zone_radius_m": 0.0008}), "spherical_joint",
+                   COARSE["spherical_joint"], use_cache=False)
+    assert c.cache_key != a.cache_key
+    assert c.points.shape != a.points.shape or not np.array_equal(c.points, a.points)
 
 
 def test_changing_a_parameter_changes_mesh_and_cache_key(case, coarse):

@@ -18,10 +18,11 @@ FE_BASELINE = ROOT / "reports/baseline/fe_coarse.json"
 
 
 def test_ci_subset_coarse_verify_check(tmp_path):
-    """CI: coarse mesh, P0 and the corner P7, simplified level, both idealizations, --check against the
-    committed analytical and FE baselines and the 5 % threshold."""
-    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--level", "simplified", "--points", "P0,P7",
-                                    "--mesh", "coarse", "--out", str(tmp_path), "--check", "--no-vtu",
+    """CI: coarse mesh, P0 and the corner P7, both levels, both idealizations and the contact-joint FE
+    (theoretical slip moment, --no-joint-fe), --check against the committed analytical and FE baselines and
+    the thresholds (5 % simplified, 10 % detailed)."""
+    res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--level", "both", "--points", "P0,P7",
+                                    "--mesh", "coarse", "--out", str(tmp_path), "--check", "--no-vtu", "--no-joint-fe",
                                     "--baseline", str(ROOT / "reports/baseline/analytical.json"),
                                     "--fe-baseline", str(FE_BASELINE)])
     assert res.exit_code == 0, res.output
@@ -34,8 +35,18 @@ def test_ci_subset_coarse_verify_check(tmp_path):
     for r in rows:
         # the simplified FE follows the matching analytical idealization (issue 6 acceptance: mean <= 5 %)
         assert float(r["rel_error"]) < ERROR_THRESHOLDS["simplified"], r
+    with open(tmp_path / "errors_detailed.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error"]
+    released = [float(r["rel_error"]) for r in rows if r["joints"] == "released"]
+    rigid = [float(r["rel_error"]) for r in rows if r["joints"] == "rigid"]
+    # the contact-joint FE follows 'released' (measured < 1 %), far from 'rigid' (10-70 %, mean > 40 %)
+    assert max(released) < 0.02 and sum(rigid) / len(rigid) > 0.3
     m = json.loads((tmp_path / "manifest.json").read_text())
     assert m["fe"]["mesh_level"] == "coarse" and m["fe"]["dofs"]["link"] > 0
+    assert m["fe"]["contact_joints"]["follows"] == "released"
+    keys = json.loads(FE_BASELINE.read_text())
+    assert any("/detailed/contact/" in k for k in keys)  # the contact FE is under regression too
     assert set(m["fe"]["timings_s"]) >= {"meshing", "assembly", "solve"}
     assert (tmp_path / "fe_deflection_simplified_x.png").is_file() and (tmp_path / "report.html").is_file()
 

@@ -1,6 +1,8 @@
-"""Bench ``geometry``: meshing time and element counts per part at the default and a fine size, and a
+"""Bench ``geometry``: meshing time and element counts per part at the default and a fine size, a
 comparison of contact-refinement methods on the spherical-joint seat (structured graded mesh vs
-fTetWild sizing field vs local subdivision vs uniform), measured without the mesh cache."""
+fTetWild sizing field vs local subdivision vs uniform), the spherical-joint ball (structured cubed
+sphere, the default, vs the former fTetWild + subdivision ball) and a check that two cold builds of the
+spherical joint are identical, all measured without the mesh cache."""
 from __future__ import annotations
 
 import os
@@ -57,6 +59,10 @@ def run() -> dict:
                 b = m.body_index("ball")
                 q = np.array([0.0, 0.0, -case.spherical_joint.ball_radius_m])
                 out[f"ball_{label}_contact_edge_mm"] = round(_contact_edge(m.points, m.tets[m.body_of_tet == b], q, 0.5e-3) * 1e3, 4)
+                qb = m.quality["bodies"]["ball"]
+                out[f"ball_{label}_tets"] = qb["n_tets"]
+                out[f"ball_{label}_min_dihedral_deg"] = round(qb["min_dihedral_deg"], 2)
+                out[f"ball_{label}_volume_error_pct"] = round(100 * qb["volume_rel_error"], 4)
     # leg assembly from cached parts (what a sweep over points pays)
     with tempfile.TemporaryDirectory() as td:
         old = os.environ.get("FEMCHECK_CACHE")
@@ -74,11 +80,25 @@ def run() -> dict:
                 os.environ.pop("FEMCHECK_CACHE", None)
             else:
                 os.environ["FEMCHECK_CACHE"] = old
-    # contact refinement on the seat: target contact edge = size / contact_refinement
+    # determinism without the cache (issue acceptance): two cold builds, bit-identical arrays
+    a = sj.build(case, use_cache=False)
+    b = sj.build(case, use_cache=False)
+    out["spherical_joint_cold_builds_identical"] = bool(
+        np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+        and all(np.array_equal(a.regions[k].facets, b.regions[k].facets) for k in a.regions))
+    # ball: structured cubed sphere (default) vs the former fTetWild sizing field + local subdivision
     p = sj.parameters(case)
     h = p["size_m"]
     h_c = h / p["contact_refinement"]
     q = np.array([0.0, 0.0, -p["ball_radius_m"]])
+    for label, fn in (("structured", lambda: sj._ball_structured(p, h, h_c, p["grading"])),
+                      ("tetwild_subdivided", lambda: sj._ball_tetwild(p, h, h_c, p["grading"], subdivide=True))):
+        t0 = time.perf_counter()
+        pts, tets = fn()
+        out[f"ball_{label}_time_s"] = round(time.perf_counter() - t0, 3)
+        out[f"ball_{label}_tets"] = int(len(tets))
+        out[f"ball_{label}_contact_edge_mm"] = round(_contact_edge(pts, tets, q, 0.5e-3) * 1e3, 4)
+    # contact refinement on the seat: target contact edge = size / contact_refinement
     out["seat_target_contact_edge_mm"] = round(h_c * 1e3, 4)
     for label, fn in (("structured", lambda: sj._seat_structured(p, h, h_c, p["grading"])),
                       ("sizing_field", lambda: sj._seat_tetwild(p, h, h_c, p["grading"], uniform=False)),

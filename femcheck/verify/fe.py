@@ -43,6 +43,7 @@ class FEVerification:
     tets: dict
     fixed_point_iterations: int
     linear_solver: str
+    friction: object = None
 
     def deflection(self, point, direction, level, joints) -> float:
         return self.results[point].cases[(level, joints, direction)].deflection_m
@@ -104,4 +105,5 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
                           timings_s={k: round(v, 3) for k, v in timings.items()},
                           dofs={"link": link.dofs, "guideway_min": min(gdofs), "guideway_max": max(gdofs)},
                           tets={"link": link.n_tets, "guideway_min": min(gtets), "guideway_max": max(gtets)},
-                          fixed_point_iterations=int(iters), linear_solver=link.solver or "dense")
+                          fixed_point_iterations=int(iters), linear_solver=link.solver or "dense",
+                          friction=friction)

@@ -110,7 +110,13 @@ def _average(tab) -> dict:
 
 
 def fe_baseline_values(fe) -> dict[str, float]:
-    return {f"fe/{fe.mesh.level}/{fe.kind}/{lvl}/{j}/{p}/{d}/deflection_m": c.deflection_m
+    """Baseline keys; the contact joints are keyed by where their ball slip moment came from (``contact``:
+    theory, ρ = 1, ``--no-joint-fe``; ``contact_fe_slip``: the ball tilt contact FE)."""
+    measured = fe.friction is not None and fe.friction.tilt_slip_ratio != 1.0
+
+    def name(j):
+        return "contact_fe_slip" if j == "contact" and measured else j
+    return {f"fe/{fe.mesh.level}/{fe.kind}/{lvl}/{name(j)}/{p}/{d}/deflection_m": c.deflection_m
             for p, r in fe.results.items() for (lvl, j, d), c in r.cases.items()}
 
 
