@@ -141,6 +141,21 @@ class Factorization:
         self.iterations = its
         return out.reshape(b.shape)
 
+    def free(self) -> None:
+        """Release the solver's memory now. PARDISO keeps its factors in memory that Python does not own:
+        without this, every renewed factorization of a Newton loop stays allocated until the process ends
+        (measured: > 14 GB after ~20 factorizations of a 40k-unknown frictional contact model)."""
+        solver = getattr(self, "_solver", None)
+        if solver is not None:
+            solver.free_memory(everything=True)
+            self._solver = None
+
+    def __del__(self):
+        try:
+            self.free()
+        except Exception:  # interpreter shutdown: the library may already be gone
+            pass
+
     def __repr__(self) -> str:
         return f"Factorization(n={self.n}, method={self.method!r}, seconds={self.seconds:.3g})"
 
