@@ -49,20 +49,35 @@ def test_hertz_cylinder_half_width_coarse():
     assert r.detail["force_per_length_N_m"] == pytest.approx(hc.P_LINE, rel=1e-6)
 
 
+def test_hertz_sphere_mesh_is_a_conforming_o_grid():
+    from femcheck.fe.checks import hertz_sphere as hs
+
+    m = hs.level_mesh("coarse")
+    p, t = m.p, m.t
+    a, b, c, d = (p[:, t[i]] for i in range(4))
+    vol = np.einsum("ij,ij->j", np.cross(b - a, c - a, axis=0), d - a) / 6.0
+    assert vol.min() > 0.0                                           # positively oriented tets
+    assert vol.sum() == pytest.approx(hs.L**3, rel=1e-12)            # the cube [0, L]³, no gaps or overlaps
+    # conforming: every boundary facet lies on a face of the cube (an unmatched interior facet would not)
+    fc = p[:, m.facets[:, m.boundary_facets()]].mean(axis=1)
+    assert np.all(np.isclose(fc, 0.0, atol=1e-15).any(axis=0) | np.isclose(fc, hs.L, rtol=1e-12).any(axis=0))
+
+
 def test_hertz_sphere_coarse_approach_and_depth_independence():
     from femcheck.fe.checks import hertz_sphere as hs
 
     model = hs.build("coarse")
     res = hs.solve(model)
     for e in hs.evaluate(model, res):
-        # coarse mesh (30 µm elements, 2.5–4 per contact radius): approach within 2 %, radius within 8 %
-        assert e["delta_rel_error"] < 0.02
-        assert e["a_rel_error"] < 0.08
+        # coarse (k = 3, cells ≈ a/3 at the contact edges): measured −0.56 / −0.63 %, FE stiffer than Hertz
+        assert -0.01 < e["delta_error"] < 0.0
+        assert e["a_rel_error"] < 0.08  # outermost closed Gauss point: measured −4.0 / −5.2 %
         assert e["contact_force_N"] == pytest.approx(e["force_N"], rel=1e-6)  # equilibrium
-        # depth extraction: approach of axis points + 2 v(d) agrees with δ = −Δ within 1.5 % at every depth
+        # depth extraction: approach of axis points + 2 v(d) agrees with δ = −Δ at every depth
+        # (measured ≤ 0.17 % at 0.35–0.9 mm; 0.5 % leaves room for the coarse growth layers)
         assert e["depth_extraction"]
         for d in e["depth_extraction"]:
-            assert d["delta_m"] == pytest.approx(e["delta_m"], rel=0.015)
+            assert d["delta_m"] == pytest.approx(e["delta_m"], rel=0.005)
 
 
 def test_check_solver_cli_json_contact_patch():
@@ -87,6 +102,7 @@ def test_hertz_sphere_default_acceptance_and_penalty_independence():
     ev = hs.evaluate(model, res)
     for e in ev:
         assert e["delta_rel_error"] < 0.02  # acceptance: approach within 2 % at the default refinement
+        assert e["delta_rel_error"] < 0.01  # bench target ≤ 1 % (measured −0.24 / −0.22 %)
         assert e["a_rel_error"] < 0.05      # acceptance: contact radius within 5 %
     stiff = hs.build("default", penalty_factor=10 * 100.0)
     ev10 = hs.evaluate(stiff, hs.solve(stiff))
@@ -99,12 +115,33 @@ def test_hertz_sphere_default_acceptance_and_penalty_independence():
 def test_hertz_sphere_refinement_study():
     from femcheck.fe.checks import hertz_sphere as hs
 
+    levels = ("coarse", "default", "fine")
     errs = {}
-    for level in ("coarse", "default"):
+    for level in levels:  # fine: 87k DOFs, 70–90 s on 2 shared cores
         m = hs.build(level)
-        errs[level] = [e["delta_rel_error"] for e in hs.evaluate(m, hs.solve(m))]
-    # refinement reduces the worse approach error of the two loads
-    assert max(errs["default"]) < max(errs["coarse"])
+        errs[level] = [e["delta_error"] for e in hs.evaluate(m, hs.solve(m))]
+    for i, F in enumerate(hs.LOADS_N):
+        e = [errs[level][i] for level in levels]
+        # displacement FE of the exact Hertz problem (half-spaces + sphere gap; truncating at L moves δ by
+        # ≤ 4e-5, measured): stiffer than Hertz at every level, and the error shrinks monotonically
+        assert all(x < 0.0 for x in e), (F, e)
+        assert abs(e[0]) > abs(e[1]) > abs(e[2]), (F, e)
+        # at a consistent rate (cell sizes ∝ 1/k): measured orders 3.0–4.5; the contact-edge singularity
+        # (u ~ ρ^1.5) allows ~3 for the energy-like approach error, > 2 leaves room for the coarse level
+        for j in range(2):
+            k0, k1 = hs.LEVELS[levels[j]], hs.LEVELS[levels[j + 1]]
+            assert np.log(e[j] / e[j + 1]) / np.log(k1 / k0) > 2.0, (F, e)
+
+
+@pytest.mark.slow
+def test_hertz_sphere_curved_mesh_variant_coarse():
+    from femcheck.fe.checks import hertz_sphere as hs
+
+    r = hs.run("coarse", geometry="sphere")
+    for e in r.detail["loads"]:
+        # the sphere carried by the mesh (not the Hertz half-space idealization): measured +0.58 / +0.39 %
+        assert e["delta_rel_error"] < 0.02
+        assert e["contact_force_N"] == pytest.approx(e["force_N"], rel=1e-6)
 
 
 @pytest.mark.slow
