@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 import logging
 from pathlib import Path
 
@@ -64,14 +63,8 @@ def fe_code_version() -> str:
     """SHA-256 (12 hex) of the FE, device-FE, meshing and FE-task sources; part of an FE sample's key,
     so a change of the FE code invalidates stored FE samples instead of mixing them in on ``--resume``."""
     import femcheck
-    root = Path(femcheck.__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for entry in _FE_SOURCES:
-        p = root / entry
-        for f in sorted([p] if p.is_file() else p.rglob("*.py")):
-            h.update(str(f.relative_to(root)).encode())
-            h.update(f.read_bytes())
-    return h.hexdigest()[:12]
+    from femcheck.sweep.store import source_hash
+    return source_hash(Path(femcheck.__file__).resolve().parent.parent, _FE_SOURCES)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -37,18 +37,22 @@ _MODEL_SOURCES = ("chain", "compliance", "kinematics", "case/schema.py", "case/r
                   "case/haptic_6psu_solid.py", "sweep/evaluate_analytical.py")
 
 
-@functools.lru_cache(maxsize=1)
-def code_version() -> str:
-    """``femcheck <version>+<12 hex>``: the package version and a hash of the model source files."""
-    import femcheck
-    root = Path(femcheck.__file__).parent
+def source_hash(root: Path, entries) -> str:
+    """SHA-256 (12 hex) of the ``*.py`` files (path and content) of ``entries`` (files or folders below ``root``)."""
     h = hashlib.sha256()
-    for entry in _MODEL_SOURCES:
+    for entry in entries:
         p = root / entry
         for f in sorted([p] if p.is_file() else p.rglob("*.py")):
             h.update(str(f.relative_to(root)).encode())
             h.update(f.read_bytes())
-    return f"{femcheck.__version__}+{h.hexdigest()[:12]}"
+    return h.hexdigest()[:12]
+
+
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """``femcheck <version>+<12 hex>``: the package version and a hash of the model source files."""
+    import femcheck
+    return f"{femcheck.__version__}+{source_hash(Path(femcheck.__file__).parent, _MODEL_SOURCES)}"
 
 
 def sample_keys(case_sha256: str, keys, values: np.ndarray, options: dict, version: str | None = None) -> list[str]:
