@@ -32,3 +32,14 @@ def isolated_mesh_cache(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("FEMCHECK_CACHE", str(tmp_path_factory.mktemp("meshes")))
         yield
+
+
+def assert_same_tables(t1, t2):
+    """Two pyarrow result tables are equal column by column, bit for bit (identical inputs through the same
+    deterministic code in any process must give identical results)."""
+    import numpy as np
+    a = {c: np.asarray(t1.column(c).to_numpy(zero_copy_only=False)) for c in t1.column_names}
+    b = {c: np.asarray(t2.column(c).to_numpy(zero_copy_only=False)) for c in t2.column_names}
+    assert a.keys() == b.keys()
+    for c in a:
+        np.testing.assert_array_equal(a[c], b[c], err_msg=c)

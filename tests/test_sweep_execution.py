@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import femcheck
+from conftest import assert_same_tables
 from femcheck.errors import CaseError, FemcheckError
 from femcheck.sweep.evaluate_analytical import run_analytical_task
 from femcheck.sweep.executor import SweepInterrupted
@@ -43,16 +44,7 @@ def _sweep(case, ranges, out, **kw):
     return run_sweep(case, ranges, out, **kw)
 
 
-def _numeric(table) -> dict[str, np.ndarray]:
-    return {c: np.asarray(table.column(c).to_numpy(zero_copy_only=False)) for c in table.column_names}
-
-
-def _assert_same(t1, t2):
-    a, b = _numeric(t1), _numeric(t2)
-    assert a.keys() == b.keys()
-    for c in a:
-        # identical inputs and the same deterministic code in every process: results must agree bit for bit
-        np.testing.assert_array_equal(a[c], b[c], err_msg=c)
+_assert_same = assert_same_tables
 
 
 @pytest.fixture(scope="module")

@@ -14,6 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 import femcheck
+from conftest import assert_same_tables
 from femcheck.cli import get_app
 from femcheck.errors import CaseError
 from femcheck.sweep.evaluate_analytical import result_columns
@@ -47,16 +48,7 @@ def _fe_sweep(case, ranges, out, **kw):
                      fe_level="detailed", **kw)
 
 
-def _numeric(table) -> dict[str, np.ndarray]:
-    return {c: np.asarray(table.column(c).to_numpy(zero_copy_only=False)) for c in table.column_names}
-
-
-def _assert_same(t1, t2):
-    a, b = _numeric(t1), _numeric(t2)
-    assert a.keys() == b.keys()
-    for c in a:
-        # the same inputs through the same deterministic FE code in any process: equal bit for bit
-        np.testing.assert_array_equal(a[c], b[c], err_msg=c)
+_assert_same = assert_same_tables
 
 
 # -- fast: plumbing without an FE solve -------------------------------------------------------------

@@ -90,9 +90,9 @@ def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, para
     if contact:
         if friction is None:
             raise ValueError("contact joints need the joint friction data (femcheck.fe_device.joint_friction)")
-        k_rot_sp, k_rot_uj = friction.stick_stiffness(np.full(6, Fmin))[0:2], None
-        k_rot_sp = np.stack([k_rot_sp[0], k_rot_sp[0], k_rot_sp[1]], axis=1)
-        k_rot_uj = np.repeat(friction.stick_stiffness(np.full(6, Fmin))[2][:, None], 2, axis=1)
+        k_tilt, k_spin, k_pin = friction.stick_stiffness(np.full(6, Fmin))  # start stuck, at F_min
+        k_rot_sp = np.stack([k_tilt, k_tilt, k_spin], axis=1)
+        k_rot_uj = np.stack([k_pin, k_pin], axis=1)
 
     def springs(k_sp):
         if not contact:

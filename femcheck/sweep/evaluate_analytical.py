@@ -27,6 +27,7 @@ import logging
 import numpy as np
 
 from femcheck.errors import FemcheckError
+from femcheck.sweep.sample_chunk import SampleChunk
 
 log = logging.getLogger(__name__)
 
@@ -46,28 +47,15 @@ def dir_vector(direction: str) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
-class AnalyticalTask:
-    """One chunk of an analytical sweep (picklable; sent to pool or Dask workers).
-
-    case: the base case; keys, kinds: swept dotted keys and their kinds ("array" | "variant");
-    values: (k, d) parameter values (SI); sample_ids: (k,) int; sample_keys: (k,) result keys;
-    model: "simplified" | "detailed"; joints: "rigid" | "released" | None (case default);
-    points: test point labels (e.g. ("P0", ..., "P8")).
+class AnalyticalTask(SampleChunk):
+    """One chunk of an analytical sweep (:class:`SampleChunk` fields, then) model: "simplified" |
+    "detailed"; joints: "rigid" | "released" | None (case default); points: test point labels
+    (e.g. ("P0", ..., "P8")).
     """
 
-    case: object
-    keys: tuple[str, ...]
-    kinds: tuple[str, ...]
-    values: np.ndarray
-    sample_ids: np.ndarray
-    sample_keys: tuple[str, ...]
     model: str
     joints: str | None
     points: tuple[str, ...]
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.values.shape[0])
 
 
 def element_mass_kg(case, overrides: dict[str, np.ndarray] | None = None) -> np.ndarray | float:

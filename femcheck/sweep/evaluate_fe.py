@@ -40,6 +40,7 @@ import numpy as np
 
 from femcheck.errors import FemcheckError
 from femcheck.sweep.evaluate_analytical import dir_tag, element_mass_kg, result_columns
+from femcheck.sweep.sample_chunk import SampleChunk
 
 log = logging.getLogger(__name__)
 
@@ -68,7 +69,7 @@ def fe_code_version() -> str:
 
 
 @dataclasses.dataclass(frozen=True)
-class FETask:
+class FETask(SampleChunk):
     """One task of an FE sweep: one (or a few) samples (picklable; sent to pool or Dask workers).
 
     case: the base case; keys, kinds: swept dotted keys and their kinds (every key goes through a
@@ -77,20 +78,10 @@ class FETask:
     "released"; points: test point labels; mesh: mesh level "coarse" | "default" | "fine".
     """
 
-    case: object
-    keys: tuple[str, ...]
-    kinds: tuple[str, ...]
-    values: np.ndarray
-    sample_ids: np.ndarray
-    sample_keys: tuple[str, ...]
     level: str
     joints: str
     points: tuple[str, ...]
     mesh: str = "coarse"
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.values.shape[0])
 
 
 def fe_variant(task: FETask, i: int):
