@@ -65,7 +65,9 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     _register_all()
     try:
-        app(args=argv, prog_name="femcheck", standalone_mode=False)
+        # standalone_mode=False makes click *return* the code of typer.Exit(n) instead of exiting:
+        # it must be passed on, or `verify --check` reports drift and still exits 0
+        rc = app(args=argv, prog_name="femcheck", standalone_mode=False)
     except FemcheckError as exc:
         typer.secho(f"error: {exc}", err=True, fg="red")
         return 2
@@ -82,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         if type(exc).__name__ == "Abort":
             return 130
         raise
-    return 0
+    return int(rc) if isinstance(rc, int) else 0
 
 
 if __name__ == "__main__":
