@@ -52,3 +52,13 @@ class MeasuredDataError(FemcheckError, ValueError):
         if column is not None:
             where += f", column '{column}'"
         super().__init__(f"{where}: {message}")
+
+
+class SingularPoseError(FemcheckError, ValueError):
+    """A pose at or too near a singularity of the mechanism: names the pose, the leg and cond(J_h)."""
+
+    def __init__(self, pose_label: str, leg: int, condition: float, limit: float, detail: str = ""):
+        self.pose_label, self.leg, self.condition, self.limit = pose_label, leg, condition, limit
+        cond = "inf" if not condition < float("inf") else f"{condition:.4g}"
+        super().__init__(f"pose {pose_label} is singular or too near a singularity: cond(J_h) = {cond} > {limit:g} "
+                         f"(leg {leg}{': ' + detail if detail else ''}); move away from it or raise --max-condition")

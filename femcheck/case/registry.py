@@ -72,7 +72,11 @@ def load_case(path):
     if not path.is_file():
         raise CaseError(path, "", "case file not found")
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise CaseError(path, "", "not a text file (not UTF-8); expected a TOML case file") from None
+    try:
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(path, "", f"not valid TOML: {exc}") from None
     return build_case(raw, path)

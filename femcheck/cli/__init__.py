@@ -60,6 +60,10 @@ def get_app() -> typer.Typer:
     return app
 
 
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: ``femcheck ...``. Known femcheck errors print one clear line and exit 2."""
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
@@ -76,13 +80,19 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         typer.secho("interrupted", err=True, fg="red")
         return 130
+    except OSError as exc:
+        # a file the user named cannot be read or written (permissions, a directory in the way, disk full)
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        typer.secho(f"error: {where}{exc.strerror or exc}", err=True, fg="red")
+        return 2
     except Exception as exc:
-        # usage errors of (typer's own copy of) click: they know how to show themselves
-        if hasattr(exc, "show") and hasattr(exc, "exit_code"):
-            exc.show()
-            return int(exc.exit_code)
-        if type(exc).__name__ == "Abort":
+        if type(exc).__name__ == "Abort":  # click turns Ctrl-C at a prompt into Abort
+            typer.secho("interrupted", err=True, fg="red")
             return 130
+        # usage errors of (typer's own copy of) click: one line naming the option, no usage box
+        if hasattr(exc, "format_message") and hasattr(exc, "exit_code"):
+            typer.secho(f"error: {_one_line(exc.format_message())}", err=True, fg="red")
+            return int(exc.exit_code)
         raise
     return int(rc) if isinstance(rc, int) else 0
 

@@ -29,6 +29,9 @@ def parse_vector(text: str, n: int, name: str) -> np.ndarray:
         raise typer.BadParameter(f"{name}: {text!r} is not a comma-separated list of numbers") from None
     if len(values) != n:
         raise typer.BadParameter(f"{name}: expected {n} comma-separated numbers, got {len(values)}")
+    bad = [v for v in values if not np.isfinite(v)]
+    if bad:
+        raise typer.BadParameter(f"{name}: {text!r} contains {bad[0]}; expected {n} finite numbers")
     return np.asarray(values)
 
 
@@ -54,3 +57,15 @@ def direction_vector(direction: str) -> np.ndarray:
     v = np.zeros(3)
     v["xyz".index(axis)] = sign
     return v
+
+
+def load_case_for(path, command: str, kinds=("haptic_6psu",)):
+    """Load a case and require one of the case kinds ``command`` works on; else one line naming both."""
+    from femcheck.case import load_case
+    from femcheck.errors import CaseError
+
+    case = load_case(path)
+    kind = case.meta.kind or "haptic_6psu"
+    if kind not in kinds:
+        raise CaseError(path, "meta.kind", f"is {kind!r}; `femcheck {command}` takes {' or '.join(map(repr, kinds))} cases")
+    return case

@@ -6,9 +6,10 @@ import json
 from pathlib import Path
 
 import typer
+
+from femcheck.cli._common import load_case_for
 from rich.table import Table
 
-from femcheck.case import load_case
 from femcheck.cli import console
 from femcheck.cli._common import Joints, ModelLevel
 
@@ -30,7 +31,7 @@ def register(app: typer.Typer) -> None:
         from femcheck.measured import process, read_measured_csv
         from femcheck.report.atomic import refuse_input_overwrite, write_text_atomic
 
-        case = load_case(case_path)
+        case = load_case_for(case_path, "diagnose")
         for out in (json_out,) + ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
                 refuse_input_overwrite(out, [case_path, measured])

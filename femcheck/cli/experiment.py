@@ -6,7 +6,8 @@ from pathlib import Path
 
 import typer
 
-from femcheck.case import load_case
+from femcheck.cli._common import load_case_for
+
 from femcheck.errors import FemcheckError
 
 
@@ -40,7 +41,7 @@ def register(app: typer.Typer) -> None:
             refuse_input_overwrite(p, [case_path])
             if Path(p).exists() and not force:
                 raise FemcheckError(f"refusing to overwrite existing {p} (use --force)")
-        case = load_case(case_path)
+        case = load_case_for(case_path, "experiment simulate")
         try:
             hidden = [parse_effect_spec(e) for e in effect]
         except KeyError as exc:

@@ -6,10 +6,15 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from femcheck.case import load_case
+from femcheck.cli._common import load_case_for
+
 from femcheck.cli._common import Joints, ModelLevel
-from femcheck.report.atomic import refuse_input_overwrite, write_bytes_atomic
+from femcheck.errors import FemcheckError
+from femcheck.report.atomic import check_output_file, refuse_input_overwrite, write_bytes_atomic
 from femcheck.report.stiffness_map import plot_stiffness_map, stiffness_map
+
+#: grid points per side: 1001^2 poses is already ~1 M chain evaluations
+MAX_RESOLUTION = 1001
 
 
 def register(app: typer.Typer) -> None:
@@ -27,9 +32,21 @@ def register(app: typer.Typer) -> None:
         """Directional stiffness over a horizontal workspace slice, with the test cube drawn."""
         if direction not in ("x", "y", "z"):
             raise typer.BadParameter(f"--direction {direction!r}; expected x, y or z")
-        case = load_case(case_path)
+        if not np.isfinite(z):
+            raise typer.BadParameter(f"--z: {z}; expected a finite height in m")
+        if not (np.isfinite(half_width) and 0 < half_width <= 1.0):
+            raise typer.BadParameter(f"--half-width: {half_width}; expected 0 < half width <= 1 m")
+        if not 2 <= resolution <= MAX_RESOLUTION:
+            raise typer.BadParameter(f"--resolution: {resolution}; expected 2..{MAX_RESOLUTION} grid points per side")
+        if out.suffix.lower() != ".png":
+            raise typer.BadParameter(f"--out: {str(out)!r}; expected a .png file name (the map is a PNG picture)")
+        check_output_file(out)
+        case = load_case_for(case_path, "map")
         refuse_input_overwrite(out, [case_path])
         smap = stiffness_map(case, direction, z, model.value, joints.value if joints else None, half_width, resolution)
+        if not np.isfinite(smap.k).any():
+            raise FemcheckError(f"--z {z}: no grid point of the {2 * half_width:g} m square at z = {smap.z * 1e3:.0f} mm "
+                                f"is reachable; nothing written to {out} (--z is measured from the test-cube centre)")
         write_bytes_atomic(out, plot_stiffness_map(case, smap))
         k = smap.k[~np.isnan(smap.k)]
         typer.echo(f"wrote {out}: k_{direction} {k.min()/1e3:.2f}..{k.max()/1e3:.2f} N/mm over "

@@ -11,6 +11,11 @@ from typing import Optional
 
 import typer
 
+from femcheck.cli._common import load_case_for
+
+#: finest --size accepted, as a fraction of the part's default edge length
+MAX_REFINEMENT = 20.0
+
 
 def register(app: typer.Typer) -> None:
     @app.command("mesh")
@@ -28,9 +33,8 @@ def register(app: typer.Typer) -> None:
         from rich.console import Console
         from rich.table import Table
 
-        from femcheck.case import load_case
         from femcheck.errors import FemcheckError
-        from femcheck.report.atomic import refuse_input_overwrite
+        from femcheck.report.atomic import check_output_file, refuse_input_overwrite
         from geometry import PARTS, MeshingError, build_part
         from geometry.io import write_mesh
 
@@ -40,10 +44,24 @@ def register(app: typer.Typer) -> None:
             raise FemcheckError(f"--out {out}: expected a .vtu or .xdmf file name")
         if png is not None and png.suffix.lower() != ".png":
             raise FemcheckError(f"--png {png}: expected a .png file name")
+        if size is not None and not (size == size and 0 < size < float("inf")):
+            raise FemcheckError(f"--size {size}: expected a positive edge length in m (omit it for the case's [solid.mesh] size)")
+        check_output_file(out)
+        if png is not None:
+            check_output_file(png, "--png")
         refuse_input_overwrite(out, [case])
         import time
 
-        c = load_case(case)
+        c = load_case_for(case, "mesh")
+        if size is not None:
+            sizes = c.solid.mesh
+            default = getattr(sizes, f"{part}_size_m", None) or min(
+                sizes.guideway_size_m, sizes.proximal_link_size_m, sizes.spherical_joint_size_m,
+                sizes.universal_joint_size_m, sizes.platform_size_m)
+            # tets grow as (default/size)^3: 20x finer is ~8000x the default mesh, about the memory of this machine
+            if size < default / MAX_REFINEMENT:
+                raise FemcheckError(f"--size {size:g} m: more than {MAX_REFINEMENT:g}x finer than the {part} default "
+                                    f"{default:g} m (about {(default / size) ** 3:.3g}x the tets); expected >= {default / MAX_REFINEMENT:g} m")
         t0 = time.perf_counter()
         try:
             m = build_part(c, part, size, point=point, chain=chain, use_cache=not no_cache)

@@ -5,12 +5,14 @@ import json
 
 import numpy as np
 import typer
+
+from femcheck.cli._common import load_case_for
 from rich.table import Table
 
-from femcheck.case import load_case
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.cli import console
 from femcheck.cli._common import Joints, ModelLevel, parse_vector, select_pose
+from femcheck.kinematics.conditioning import DEFAULT_MAX_CONDITION, require_well_conditioned
 from femcheck.kinematics.psu6 import condition_number, leg_geometry
 
 
@@ -23,14 +25,19 @@ def register(app: typer.Typer) -> None:
         point: str = typer.Option(None, "--point", help="test point P0..P8 (default P0)"),
         pose: str = typer.Option(None, "--pose", help="TCP pose x,y,z,rx,ry,rz (m, rad; rotation vector)"),
         wrench: str = typer.Option(None, "--wrench", help="TCP wrench fx,fy,fz,mx,my,mz (N, N m); default: the case's detailed test load along +z"),
+        max_condition: float = typer.Option(DEFAULT_MAX_CONDITION, "--max-condition", help="refuse poses whose cond(J_h) exceeds this (singularity guard; warns above a tenth of it)"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object: K (6x6, SI), deflection (6, m and rad), contributions"),
     ):
         """6x6 stiffness at the TCP, deflection under a wrench, and the element contributions (seed 000 Fig. 23).
 
         The detailed model's Hertz contacts are linearized at the given wrench (CONVENTIONS.md §6).
         """
-        case = load_case(case_path)
+        case = load_case_for(case_path, "stiffness")
         P, label = select_pose(case, point, pose)
+        if not (np.isfinite(max_condition) and max_condition > 1):
+            raise typer.BadParameter(f"--max-condition: {max_condition}; expected a finite number > 1")
+        cond = require_well_conditioned(case, leg_geometry(case, P, labels=[label]), [label], max_condition)
+        warnings = cond.warnings([label])
         W = parse_vector(wrench, 6, "--wrench") if wrench else np.array([0, 0, case.loads.detailed_test_N, 0, 0, 0.0])
         r = evaluate(case, P, W, model=model.value, joints=joints.value if joints else None, labels=[label])
         contrib = {ELEMENT_NAMES[e]: float(r.contributions[0, j]) for j, e in enumerate(ELEMENTS)
@@ -38,9 +45,13 @@ def register(app: typer.Typer) -> None:
         if as_json:
             typer.echo(json.dumps({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model,
                                    "joints": r.joints, "wrench": W.tolist(), "K": r.K[0].tolist(),
-                                   "deflection": r.twist[0].tolist(), "contributions": contrib}))
+                                   "deflection": r.twist[0].tolist(), "contributions": contrib,
+                                   "condition_number": float(cond.cond[0]), "max_condition": max_condition,
+                                   "warnings": warnings}))
             return
         con = console()
+        for w in warnings:
+            con.print(f"[yellow]warning:[/] {w}")
         con.print(f"[bold]{case.meta.name}[/] — {label}, model [bold]{r.model}[/], joints [bold]{r.joints}[/], "
                   f"wrench {np.array2string(W, precision=3)} (N, N m)")
         kt = Table(title="TCP stiffness K (SI: N/m | N/rad ; N m/m | N m/rad)")

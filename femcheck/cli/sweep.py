@@ -6,6 +6,8 @@ from enum import Enum
 
 import typer
 
+from femcheck.cli._common import load_case_for
+
 from femcheck.cli._common import Joints
 
 
@@ -64,7 +66,6 @@ def register(app: typer.Typer) -> None:
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
         from rich.table import Table
 
-        from femcheck.case import load_case
         from femcheck.cli import console
         from femcheck.report.atomic import refuse_input_overwrite
         from femcheck.sweep.analysis import analyse, local_elasticities
@@ -77,7 +78,7 @@ def register(app: typer.Typer) -> None:
                                      f"(got --model {model.value})")
         fe_level_value = (fe_level or FELevel.detailed).value
         mesh_value = (mesh or MeshLevel.coarse).value
-        case = load_case(case_path)
+        case = load_case_for(case_path, "sweep")
         ranges = parse_params(case, list(param))
         pts = parse_points(points)
         out_dir = Path(out) if out else Path("reports/sweep") / Path(case_path).stem

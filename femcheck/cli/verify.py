@@ -7,7 +7,10 @@ from pathlib import Path
 
 import typer
 
-from femcheck.case import load_case
+from femcheck.cli._common import load_case_for
+from femcheck.report.atomic import check_output_file
+from femcheck.report.run_folder import prepare_run_folder
+
 from femcheck.kinematics.psu6 import POINT_LABELS
 
 LEVEL_CHOICES = {"simplified": ("simplified",), "detailed": ("detailed",), "both": ("simplified", "detailed"),
@@ -30,6 +33,7 @@ def register(app: typer.Typer) -> None:
         vtu: bool = typer.Option(True, "--vtu/--no-vtu", help="write a VTU of the deformed FE models per point"),
         convergence: str = typer.Option(None, "--convergence", help="mesh-convergence study (coarse/default/fine) at this point, "
                                         "e.g. P0; default: P0 for a full default-mesh run, else none ('none' to skip)"),
+        force: bool = typer.Option(False, "--force", help="empty --out even if it holds files femcheck did not write"),
         joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="detailed level: run the contact FE of the "
                                       "ball alone under tilt and use its measured slip moment in the contact joints "
                                       "(about 1-3 min); off: the theoretical slip moment mu F R"),
@@ -48,7 +52,7 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
-        case = load_case(case_path)
+        case = load_case_for(case_path, "verify")
         pts = None
         if points:
             pts = [p.strip().upper() for p in points.split(",") if p.strip()]
@@ -62,6 +66,14 @@ def register(app: typer.Typer) -> None:
         if conv_point is not None and conv_point not in POINT_LABELS:
             raise typer.BadParameter(f"--convergence: {convergence!r}; expected P0..P8 or none")
         fe_base = fe_baseline or Path(f"reports/baseline/fe_{mesh}.json")
+        for opt, path in (("--baseline", baseline), ("--fe-baseline", fe_base if levels else None)):
+            if path is not None and (check and not update_baseline) and not Path(path).is_file():
+                raise typer.BadParameter(f"{opt}: {str(path)!r} not found; expected a baseline JSON (or run --update-baseline)")
+        if update_baseline:
+            check_output_file(baseline, "--baseline")
+            if levels:
+                check_output_file(fe_base, "--fe-baseline")
+        prepare_run_folder(out, "femcheck verify", force=force, inputs=[case_path, baseline, fe_base])
         con = console()
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
         reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")

@@ -43,3 +43,41 @@ def refuse_input_overwrite(path, inputs) -> None:
         if inp and Path(inp).resolve() == p:
             from femcheck.errors import FemcheckError
             raise FemcheckError(f"refusing to write {path}: it is an input file")
+
+
+def _nearest_existing(path: Path) -> Path:
+    p = path
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def check_output_file(path, option: str = "--out") -> Path:
+    """Fail before any work if the file ``path`` could not be written: its folder is a file, it is a folder,
+    or the nearest existing folder is not writable. Names the option and the path."""
+    from femcheck.errors import FemcheckError
+    path = Path(path)
+    if path.is_dir():
+        raise FemcheckError(f"{option} {path}: is a folder; expected a file name")
+    base = _nearest_existing(path.parent if str(path.parent) else Path("."))
+    if not base.is_dir():
+        raise FemcheckError(f"{option} {path}: cannot be written, {base} is a file, not a folder")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise FemcheckError(f"{option} {path}: cannot be written, no write permission in {base}")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise FemcheckError(f"{option} {path}: cannot be written, the file is read-only")
+    return path
+
+
+def check_output_dir(path, option: str = "--out") -> Path:
+    """Fail before any work if the folder ``path`` could not be created or written into."""
+    from femcheck.errors import FemcheckError
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise FemcheckError(f"{option} {path}: is a file; expected a folder")
+    base = _nearest_existing(path)
+    if not base.is_dir():
+        raise FemcheckError(f"{option} {path}: cannot be created, {base} is a file, not a folder")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise FemcheckError(f"{option} {path}: cannot be written, no write permission in {base}")
+    return path
