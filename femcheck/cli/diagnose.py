@@ -6,12 +6,10 @@ import json
 from pathlib import Path
 
 import typer
-
-from femcheck.cli._common import load_case_for
 from rich.table import Table
 
 from femcheck.cli import console
-from femcheck.cli._common import Joints, ModelLevel
+from femcheck.cli._common import Joints, ModelLevel, load_case_for
 
 
 def register(app: typer.Typer) -> None:
@@ -21,7 +19,7 @@ def register(app: typer.Typer) -> None:
         measured: str = typer.Argument(..., metavar="MEASURED.csv", help="measured-data CSV (docs/diagnose.md)"),
         model: ModelLevel = typer.Option(ModelLevel.detailed, "--model", help="analytical model to check"),
         joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's [model] joint_rotations"),
-        json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file"),
+        json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file ('-': standard output)"),
         report: str = typer.Option(None, "--report", help="write report.md, report.html and plots into this folder"),
         max_effects: int = typer.Option(2, "--max-effects", min=1, max=3, help="most effects greedy selection may name"),
     ):
@@ -29,16 +27,28 @@ def register(app: typer.Typer) -> None:
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
         from femcheck.diagnose import AnalyticalChainModel, diagnose
         from femcheck.measured import process, read_measured_csv
-        from femcheck.report.atomic import refuse_input_overwrite, write_text_atomic
+        from femcheck.diagnose.device_match import device_mismatch_warnings
+        from femcheck.report.atomic import check_output_dir, check_output_file, refuse_input_overwrite, write_text_atomic
 
+        if json_out and json_out != "-":
+            check_output_file(json_out, "--json")
+        if report:
+            check_output_dir(report, "--report")
         case = load_case_for(case_path, "diagnose")
-        for out in (json_out,) + ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
+        for out in ((json_out,) if json_out != "-" else ()) + \
+                ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
                 refuse_input_overwrite(out, [case_path, measured])
-        readings = process(read_measured_csv(measured), case)
+        data = read_measured_csv(measured)
+        readings = process(data, case)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
+        mismatch = device_mismatch_warnings(case, data.meta, readings, m)
         d = diagnose(m, readings, max_effects=max_effects)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
+        result["warnings"] = list(result.get("warnings", [])) + mismatch
+        if json_out == "-":
+            typer.echo(json.dumps(result, indent=2, default=float))
+            return
         if json_out:
             write_text_atomic(json_out, json.dumps(result, indent=2, default=float))
         if report:
@@ -64,7 +74,7 @@ def register(app: typer.Typer) -> None:
         if d.baseline_error:
             e.add_row("seed 001 weight fit", *[f"{100 * d.baseline_error.get(k, float('nan')):.1f}" for k in keys])
         con.print(e)
-        for w in d.warnings:
+        for w in list(d.warnings) + mismatch:
             con.print(f"[yellow]warning:[/] {w}")
         if report:
             con.print(f"report: {Path(report) / 'report.html'}")

@@ -7,7 +7,6 @@ from pathlib import Path
 import typer
 
 from femcheck.cli._common import load_case_for
-
 from femcheck.errors import FemcheckError
 
 
@@ -33,8 +32,10 @@ def register(app: typer.Typer) -> None:
     ):
         """Readings of the paper's protocol (9 points, directions, preload, trials, dial resolution + noise)."""
         from femcheck.experiment.simulate import parse_effect_spec, simulate
-        from femcheck.report.atomic import refuse_input_overwrite, write_text_atomic
+        from femcheck.report.atomic import check_output_file, refuse_input_overwrite, write_text_atomic
 
+        check_output_file(out, "--out")
+        check_output_file(truth, "--truth")
         if Path(out).resolve() == Path(truth).resolve():
             raise FemcheckError(f"--out and --truth are the same file: {out}")
         for p in (out, truth):

@@ -124,7 +124,9 @@ def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level
     d_read = d_true + rng.normal(0.0, sigma, size=d_true.shape) if sigma > 0 else d_true.copy()
     if res > 0:
         d_read = res * np.round(d_read / res)
-    text = format_measured_csv(point, direction, trial, phase, load, force, d_read, resolution_m=res)
+    text = format_measured_csv(point, direction, trial, phase, load, force, d_read, resolution_m=res,
+                               meta={"case": getattr(case.meta, "name", ""), "case_sha256": case.sha256,
+                                     "source": "femcheck experiment simulate"})
     from femcheck.measured.csv_format import parse_measured_csv
     data = parse_measured_csv(text, "<virtual experiment>")
     truth = {"case": case.source, "case_sha256": case.sha256, "model": level, "joints": joints,

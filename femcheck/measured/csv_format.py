@@ -11,8 +11,11 @@ named load case (an identifier; its direction is then the applied force); ``tria
 direction; ``fx_N..fz_N``: the applied TCP force in U (N), which for an axis direction must equal
 ``load_N`` times the axis; ``dx_mm..dz_mm``: dial readings of the TCP translation (mm, dials zeroed unloaded).
 
-The file is opened read-only and never modified. Every error names the file, the row (1-based, the
-header is row 1) and the column. Internally everything is SI (m, N).
+Lines starting with ``#`` before the header carry metadata as ``# key: value`` (for example
+``# case_sha256: <hex>``, written by ``femcheck experiment simulate``); ``diagnose`` compares them with the
+case it is given. The file is opened read-only and never modified. Every error names the file, the row
+(1-based: the header is row 1 when there are no metadata lines, and every line counts) and the column.
+Internally everything is SI (m, N).
 """
 from __future__ import annotations
 
@@ -56,6 +59,8 @@ class MeasuredData:
     row: np.ndarray
     moment: np.ndarray | None = None
     rotation: np.ndarray | None = None
+    #: ``# key: value`` metadata lines before the header
+    meta: dict = dataclasses.field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.point)
@@ -77,7 +82,15 @@ def _number(path, rownum, col, text) -> float:
 
 def parse_measured_csv(text: str, source: str = "<memory>") -> MeasuredData:
     """Parse and validate CSV ``text`` (see module docstring); ``source`` names it in errors."""
-    reader = csv.reader(io.StringIO(text))
+    lines = text.splitlines(keepends=True)
+    meta: dict[str, str] = {}
+    skipped = 0
+    while skipped < len(lines) and lines[skipped].lstrip().startswith("#"):
+        key, sep, value = lines[skipped].lstrip()[1:].partition(":")
+        if sep and key.strip():
+            meta[key.strip()] = value.strip()
+        skipped += 1
+    reader = csv.reader(io.StringIO("".join(lines[skipped:])))
     try:
         header = [h.strip() for h in next(reader)]
     except StopIteration:
@@ -100,7 +113,7 @@ def parse_measured_csv(text: str, source: str = "<memory>") -> MeasuredData:
     has_m, has_r = "mx_Nm" in col, "rx_rad" in col
     rows = {k: [] for k in ("point", "direction", "trial", "phase", "load", "force", "disp", "moment", "rotation", "row")}
     seen: dict[tuple, int] = {}
-    for rownum, rec in enumerate(reader, start=2):
+    for rownum, rec in enumerate(reader, start=2 + skipped):
         if not rec or all(not f.strip() for f in rec):
             continue
         if len(rec) != len(header):
@@ -154,7 +167,7 @@ def parse_measured_csv(text: str, source: str = "<memory>") -> MeasuredData:
         load_N=np.array(rows["load"], dtype=float), force=np.array(rows["force"], dtype=float).reshape(-1, 3),
         disp=np.array(rows["disp"], dtype=float).reshape(-1, 3), row=np.array(rows["row"], dtype=int),
         moment=np.array(rows["moment"], dtype=float) if has_m else None,
-        rotation=np.array(rows["rotation"], dtype=float) if has_r else None)
+        rotation=np.array(rows["rotation"], dtype=float) if has_r else None, meta=meta)
 
 
 def read_measured_csv(path) -> MeasuredData:
@@ -169,10 +182,14 @@ def read_measured_csv(path) -> MeasuredData:
     return parse_measured_csv(text, str(path))
 
 
-def format_measured_csv(point, direction, trial, phase, load_N, force, disp, resolution_m: float = 1e-5) -> str:
-    """CSV text in the format above; ``disp`` (r, 3) in m is printed in mm with the digits the resolution needs."""
+def format_measured_csv(point, direction, trial, phase, load_N, force, disp, resolution_m: float = 1e-5,
+                        meta: dict | None = None) -> str:
+    """CSV text in the format above; ``disp`` (r, 3) in m is printed in mm with the digits the resolution needs;
+    ``meta`` becomes ``# key: value`` lines before the header."""
     digits = max(0, int(math.ceil(-math.log10(resolution_m * 1e3) - 1e-9))) + 1 if resolution_m > 0 else 6
     out = io.StringIO()
+    for key, value in (meta or {}).items():
+        out.write(f"# {key}: {value}\n")
     w = csv.writer(out, lineterminator="\n")
     w.writerow(COLUMNS)
     for i in range(len(point)):
