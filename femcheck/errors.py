@@ -7,7 +7,16 @@ from __future__ import annotations
 
 
 class FemcheckError(Exception):
-    """Base class of all femcheck errors."""
+    """Base class of all femcheck errors. The CLI prints the message on one line and exits with ``exit_code``
+    (2: bad input, the default)."""
+
+    exit_code = 2
+
+
+class CheckFailedError(FemcheckError):
+    """A run that completed but whose check failed (too many failed samples, a gated verdict): exit 1."""
+
+    exit_code = 1
 
 
 class CaseError(FemcheckError, ValueError):

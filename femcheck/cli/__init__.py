@@ -65,7 +65,8 @@ def _one_line(text: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: ``femcheck ...``. Known femcheck errors print one clear line and exit 2."""
+    """Entry point: ``femcheck ...``. Exit codes: 0 all good, 1 a failed check, 2 bad input (a femcheck error
+    prints one line, no traceback), 130 Ctrl-C (docs/errors.md)."""
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     _register_all()
     try:
@@ -73,8 +74,8 @@ def main(argv: list[str] | None = None) -> int:
         # it must be passed on, or `verify --check` reports drift and still exits 0
         rc = app(args=argv, prog_name="femcheck", standalone_mode=False)
     except FemcheckError as exc:
-        typer.secho(f"error: {exc}", err=True, fg="red")
-        return 2
+        typer.secho(f"error: {_one_line(exc)}", err=True, fg="red")
+        return int(getattr(exc, "exit_code", 2))
     except SystemExit as exc:  # typer/click exit codes
         return int(exc.code or 0)
     except KeyboardInterrupt:

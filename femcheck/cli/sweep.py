@@ -95,11 +95,17 @@ def register(app: typer.Typer) -> None:
                       TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=con,
                       transient=False) as bar:
             tid = bar.add_task("sweep", total=None)
-            outcome = run_sweep(case, ranges, out_dir, design=design.value, samples=samples, seed=seed,
-                                model=model.value, joints=joints.value if joints else None, points=pts,
-                                scheduler=scheduler, jobs=jobs, resume=resume, chunk_samples=chunk,
-                                fe_level=fe_level_value, mesh=mesh_value,
-                                on_progress=lambda done, total: bar.update(tid, completed=done, total=total))
+            try:
+                outcome = run_sweep(case, ranges, out_dir, design=design.value, samples=samples, seed=seed,
+                                    model=model.value, joints=joints.value if joints else None, points=pts,
+                                    scheduler=scheduler, jobs=jobs, resume=resume, chunk_samples=chunk,
+                                    fe_level=fe_level_value, mesh=mesh_value,
+                                    on_progress=lambda done, total: bar.update(tid, completed=done, total=total))
+            except KeyboardInterrupt:
+                bar.stop()
+                con.print(f"[red]interrupted[/]: the workers were stopped; finished tasks are stored in {out_dir}; "
+                          "run the same command with --resume to finish")
+                raise typer.Exit(130) from None
         man = outcome.manifest
         t = man["timing"]
         rate = t.get("sample_points_per_s")

@@ -51,7 +51,15 @@ FE_KIND = "solid"
 #: errors that mark one FE sample as failed instead of stopping the sweep: femcheck's own (invalid
 #: variant, meshing, convergence, unreachable point), singular dense algebra, and the ValueError /
 #: RuntimeError the sparse solvers raise for a singular or badly conditioned stiffness matrix
-SAMPLE_ERRORS = (FemcheckError, np.linalg.LinAlgError, ValueError, RuntimeError, ArithmeticError)
+
+
+def is_sample_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is a failure of one sample (kept as ok = False) rather than a bug (which must stop the
+    sweep): femcheck's own errors, singular algebra, and the sparse solvers' RuntimeError for a singular
+    matrix - not NotImplementedError or other RuntimeErrors, nor the ValueError/TypeError of a bug."""
+    if isinstance(exc, (FemcheckError, np.linalg.LinAlgError, ArithmeticError)):
+        return True
+    return type(exc) is RuntimeError and "singular" in str(exc).lower()
 
 #: sources whose content defines the FE results, in addition to the analytical ones of
 #: :func:`femcheck.sweep.store.code_version` (paths relative to the folder holding ``femcheck``)
@@ -112,7 +120,7 @@ def sample_rows(variant, fe, level: str, joints: str, points) -> dict[str, np.nd
 def run_fe_task(task: FETask) -> dict[str, np.ndarray]:
     """Solve the FE model of each sample of ``task``; the columns of its rows (k samples x n points,
     sample-major), as :func:`femcheck.sweep.evaluate_analytical.run_analytical_task` returns them, plus
-    ``failure``. A failing sample (``SAMPLE_ERRORS``) gives ok = False rows with its error text."""
+    ``failure``. A failing sample (:func:`is_sample_error`) gives ok = False rows with its error text."""
     from femcheck.verify.fe import run_fe
     if task.level not in FE_LEVELS:
         raise FemcheckError(f"FE level {task.level!r}: expected one of {list(FE_LEVELS)}")
@@ -126,14 +134,18 @@ def run_fe_task(task: FETask) -> dict[str, np.ndarray]:
         sid = int(task.sample_ids[i])
         try:
             variant = fe_variant(task, i)
-        except SAMPLE_ERRORS as exc:
+        except Exception as exc:
+            if not is_sample_error(exc):
+                raise
             failure[rows] = f"invalid case variant: {exc}"
             log.warning("FE sample %d not evaluated: invalid case variant: %s", sid, exc)
             continue
         try:
             fe = run_fe(variant, task.points, levels=(task.level,), mesh=task.mesh, jobs=1, kind=FE_KIND)
             block = sample_rows(variant, fe, task.level, task.joints, task.points)
-        except SAMPLE_ERRORS as exc:
+        except Exception as exc:
+            if not is_sample_error(exc):
+                raise
             failure[rows] = f"FE failed: {type(exc).__name__}: {exc}"
             log.warning("FE sample %d not evaluated: %s: %s", sid, type(exc).__name__, exc)
             continue

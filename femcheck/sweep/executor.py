@@ -95,11 +95,40 @@ def run_tasks(fn: Callable, tasks: Sequence, *, on_result: Callable, jobs: int |
     return {"backend": backend, "workers": workers, "wall_s": wall, "tasks": total}
 
 
+def _worker_init(parent_pid: int) -> None:
+    """Pool worker set-up: Ctrl-C is the parent's to handle (it stops the workers), and a worker never
+    outlives its parent (a killed ``femcheck sweep`` must not leave orphans computing)."""
+    import signal
+    import threading
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:  # Linux: the kernel sends SIGTERM when the parent dies
+        import ctypes
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+    def watch():  # elsewhere (and as a second guard): poll the parent
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(1)
+            time.sleep(1.0)
+    threading.Thread(target=watch, daemon=True, name="femcheck-parent-watch").start()
+
+
+def _stop_workers(pool) -> None:
+    """Terminate the pool's processes now (Ctrl-C: do not wait minutes for running FE samples)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+
+
 def _run_pool(fn, tasks, jobs, on_result, progress) -> int:
     workers = max(1, min(int(jobs), len(tasks)))
     total, done = len(tasks), 0
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(pool_start_method()))
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(pool_start_method()),
+                                  initializer=_worker_init, initargs=(os.getpid(),))
     futures = {}
+    interrupted = False
     try:
         futures = {pool.submit(fn, t): t for t in tasks}
         for fut in cf.as_completed(futures):
@@ -113,8 +142,12 @@ def _run_pool(fn, tasks, jobs, on_result, progress) -> int:
             on_result(futures.pop(fut), result)
             done += 1
             progress(done, total)
+    except KeyboardInterrupt:
+        interrupted = True
+        _stop_workers(pool)
+        raise
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        pool.shutdown(wait=not interrupted, cancel_futures=True)
     return workers
 
 

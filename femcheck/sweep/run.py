@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from femcheck.errors import CaseError, FemcheckError
+from femcheck.errors import CaseError, CheckFailedError, FemcheckError
 from femcheck.sweep.design import Design, make_design
 from femcheck.sweep.evaluate_analytical import AnalyticalTask, run_analytical_task
 from femcheck.sweep.evaluate_fe import FE_LEVELS, FETask, fe_code_version, run_fe_task
@@ -32,6 +32,9 @@ MODELS = ("simplified", "detailed", "fe")
 CHUNK_SAMPLE_POINTS = 20_000
 #: samples per task of an FE sweep (one FE sample takes seconds to minutes: one per task balances best)
 FE_CHUNK_SAMPLES = 1
+#: an FE sweep in which fewer samples than this fraction solve is marked failed (exit 1): its statistics
+#: would describe the samples that happened to converge, not the design
+MIN_OK_FRACTION = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,6 +82,32 @@ def preflight(case, out_dir, *, model: str, joints: str | None, resume: bool,
     if SweepStore(out_dir).has_results() and not resume:
         raise FemcheckError(f"{out_dir} already holds sweep results; pass --resume to continue or reuse them, "
                             "or choose another --out")
+
+
+def check_resumable(store: SweepStore, manifest: dict) -> None:
+    """On ``--resume``: the stored sweep must be the same sweep (case, parameter ranges, model options), else
+    the new manifest would silently replace the old one; names the first difference. The design may
+    change (a longer Sobol' sequence reuses the samples it shares, by their keys)."""
+    old = store.read_manifest()
+    if old is None:
+        return
+    for what, new_v, old_v in (("case sha256", manifest["case"]["sha256"], old.get("case", {}).get("sha256")),
+                               ("--param", manifest["parameters"], old.get("parameters")),
+                               ("options", manifest["options"], old.get("options"))):
+        if old_v is not None and _jsonable(new_v) != _jsonable(old_v):
+            raise FemcheckError(f"{store.root}: --resume of a different sweep: {what} is {_brief(new_v)}, the stored "
+                                f"sweep has {_brief(old_v)}; use the same options or another --out")
+
+
+def _jsonable(v):
+    import json
+    return json.loads(json.dumps(v, default=str))
+
+
+def _brief(v) -> str:
+    import json
+    text = json.dumps(_jsonable(v), sort_keys=True)
+    return text if len(text) <= 160 else text[:157] + "..."
 
 
 def _task(case, keys, kinds, values, sample_ids, skeys, *, model, joints, points, fe_level, mesh):
@@ -129,6 +158,8 @@ def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs
         "sample_points": des.m * n_pts, "resumed_with_finished_samples": int(des.m - len(todo)),
         "timing": {"started_utc": started},
     }
+    if resume:
+        check_resumable(store, manifest)
     store.write_manifest(manifest)
     design_cols = {"sample_id": np.arange(des.m), "sample_key": np.asarray(skeys, dtype=object),
                    "block": des.block, "base": des.base}
@@ -184,6 +215,19 @@ def run_sweep(case, ranges: list[ParameterRange], out_dir, *, design: str = "lhs
         "workers": timing["workers"], "tasks": timing["tasks"], "sample_points_evaluated": n_eval,
         "sample_points_per_s": n_eval / timing["wall_s"] if timing["wall_s"] > 0 else None,
     })
-    manifest["sample_points_ok"] = int(np.sum(table.column("ok").to_numpy(zero_copy_only=False)))
+    ok = table.column("ok").to_numpy(zero_copy_only=False)
+    manifest["sample_points_ok"] = int(np.sum(ok))
+    if model == "fe":
+        sample_ok = ok.reshape(des.m, n_pts).all(axis=1) if ok.size == des.m * n_pts else ok
+        fraction = float(np.mean(sample_ok)) if sample_ok.size else 0.0
+        manifest["samples_ok_fraction"] = fraction
+        if fraction < MIN_OK_FRACTION:
+            failures = table.column("failure").to_pylist() if "failure" in table.column_names else []
+            first = next((f for f in failures if f), "no failure text stored")
+            manifest["status"] = "failed"
+            manifest["first_error"] = first
+            store.write_manifest(manifest)
+            raise CheckFailedError(f"{store.root}: only {100 * fraction:.0f} % of the FE samples solved (at least "
+                                   f"{100 * MIN_OK_FRACTION:.0f} % needed); first error: {first}")
     store.write_manifest(manifest)
     return SweepOutcome(store=store, design=des, ranges=tuple(ranges), points=points, table=table, manifest=manifest)
