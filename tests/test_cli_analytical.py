@@ -20,7 +20,7 @@ def test_help_documents_every_command():
 
 
 def test_stiffness_json(case):
-    res = runner.invoke(get_app(), ["stiffness", str(REFERENCE_CASE), "--point", "P0", "--wrench", "15,0,0,0,0,0", "--json"])
+    res = runner.invoke(get_app(), ["stiffness", str(REFERENCE_CASE), "--point", "P0", "--wrench", "15,0,0,0,0,0", "--json", "-"])
     assert res.exit_code == 0, res.output
     obj = json.loads(res.output)
     K, d = np.array(obj["K"]), np.array(obj["deflection"])

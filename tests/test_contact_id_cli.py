@@ -49,7 +49,7 @@ def test_cli_json_with_preloads(tmp_path):
     groups = ";".join(",".join(f"{v:.6f}" for v in natural_frequencies_Hz(_bar(), kk, 3)) for kk in k)
     png = tmp_path / "rel.png"
     res = CliRunner().invoke(get_app(), ["contact-id", CASE, "--frequencies", groups, "--preloads", "100,200,400,800",
-                                         "--json", "--plot", str(png)])
+                                         "--json", "-", "--plot", str(png)])
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
     ks = np.array([r["k_n_N_per_m"] for r in out["identified"]])

@@ -31,8 +31,11 @@ def test_friction_block_sticks_below_and_slides_at_mu_n():
     # AL update: no residual slip beyond the penetration tolerance (1e-4 of max|u| ≈ 1e-10 m here)
     assert stick["max_stick_slip_m"] < 1e-9
     assert slide["status"]["slide"] == sum(slide["status"].values())  # every point slides
-    # Coulomb limit Σ w‖t‖ = μ Σ w p = μN, to the residual tolerance (1e-8 relative -> 1e-5 margin)
-    assert r.rel_error < 1e-5
+    # the horizontal reaction at the displaced top face (global equilibrium, not the return mapping) is μN
+    # up to the y share of friction from the Poisson mismatch (measured 9.4e-6 relative at coarse)
+    assert r.rel_error < 1e-4
+    assert r.computed < r.reference  # the y share can only lower the x resultant
+    assert r.rel_error <= fb.TOLERANCE["coarse"]
     assert slide["normal_force_N"] == pytest.approx(fb.N_LOAD, rel=1e-6)
 
 
@@ -85,12 +88,27 @@ def test_check_solver_cli_json_contact_patch():
 
     from femcheck.cli import get_app
 
-    out = CliRunner().invoke(get_app(), ["check-solver", "contact-patch", "--mesh", "coarse", "--json"])
+    out = CliRunner().invoke(get_app(), ["check-solver", "contact-patch", "--mesh", "coarse", "--json", "-"])
     assert out.exit_code == 0, out.output
     rows = json.loads(out.output)
     assert rows[0]["name"] == "contact-patch"
-    assert set(rows[0]) >= {"name", "computed", "reference", "rel_error", "dofs", "iterations", "seconds"}
+    assert set(rows[0]) >= {"name", "computed", "reference", "rel_error", "tolerance", "passed", "dofs", "iterations",
+                            "seconds"}
     assert rows[0]["rel_error"] < 1e-6  # the patch test is exact to round-off
+    assert rows[0]["passed"] is True
+
+
+def test_check_solver_exits_1_when_a_problem_is_outside_its_tolerance(monkeypatch):
+    """Mutation: tighten a tolerance below the attained error; the command must fail and say which."""
+    from typer.testing import CliRunner
+
+    from femcheck.cli import get_app
+    from femcheck.fe.checks import bar_modal
+
+    monkeypatch.setitem(bar_modal.TOLERANCE, "coarse", 1e-6)   # attained 3.2e-3 at coarse
+    out = CliRunner().invoke(get_app(), ["check-solver", "bar-modal", "--mesh", "coarse", "--json", "-"])
+    assert out.exit_code == 1
+    assert "bar-modal" in out.output
 
 
 @pytest.mark.slow

@@ -68,7 +68,7 @@ def test_bar_on_spring_roots_limits():
 
 def test_cli_table_and_json():
     runner = CliRunner()
-    res = runner.invoke(_app(), ["check-solver", "cantilever-beam", "bar-modal", "--mesh", "coarse", "--json"])
+    res = runner.invoke(_app(), ["check-solver", "cantilever-beam", "bar-modal", "--mesh", "coarse", "--json", "-"])
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     assert [d["name"] for d in data] == ["cantilever-beam", "bar-modal"]

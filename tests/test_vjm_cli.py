@@ -14,7 +14,7 @@ def _run(*args):
 
 
 def test_json_shape_serial():
-    out = json.loads(_run("cases/irb120.toml", "--pose", "0,45,-45,-45,45,0", "--wrench", "29.43,0,0,0,0,0", "--json").stdout)
+    out = json.loads(_run("cases/irb120.toml", "--pose", "0,45,-45,-45,45,0", "--wrench", "29.43,0,0,0,0,0", "--json", "-").stdout)
     assert len(out["deflection"]) == 6 and np.asarray(out["K"]).shape == (6, 6)
     d, K = np.asarray(out["deflection"]), np.asarray(out["K"])
     # K is the stiffness of the same model: K d = F (posture 2 of seed 003 Table 6 is regular), round-off of a 6x6 inverse
@@ -24,8 +24,8 @@ def test_json_shape_serial():
 
 
 def test_json_no_complementary_and_extended():
-    a = json.loads(_run("cases/cobot7.toml", "--pose", "0,30,0,-90,0,60,0", "--wrench", "10,0,0,0,0,0", "--json").stdout)
-    b = json.loads(_run("cases/cobot7.toml", "--pose", "0,30,0,-90,0,60,0", "--wrench", "10,0,0,0,0,0", "--json",
+    a = json.loads(_run("cases/cobot7.toml", "--pose", "0,30,0,-90,0,60,0", "--wrench", "10,0,0,0,0,0", "--json", "-").stdout)
+    b = json.loads(_run("cases/cobot7.toml", "--pose", "0,30,0,-90,0,60,0", "--wrench", "10,0,0,0,0,0", "--json", "-",
                         "--vjm", "conventional", "--no-complementary").stdout)
     assert a["vjm"] == "extended" and b["vjm"] == "conventional" and not b["complementary_stiffness"]
     # the tilt springs add compliance: the extended model deflects more
@@ -33,9 +33,9 @@ def test_json_no_complementary_and_extended():
 
 
 def test_json_parallel_pose_and_test_point_agree():
-    a = json.loads(_run("cases/hiss.toml", "--pose", "TP3", "--wrench", "0,0,-10,0,0,0", "--json").stdout)
+    a = json.loads(_run("cases/hiss.toml", "--pose", "TP3", "--wrench", "0,0,-10,0,0,0", "--json", "-").stdout)
     x = ",".join(f"{v:.12f}" for v in a["pose"])
-    b = json.loads(_run("cases/hiss.toml", "--pose", x, "--wrench", "0,0,-10,0,0,0", "--json").stdout)
+    b = json.loads(_run("cases/hiss.toml", "--pose", x, "--wrench", "0,0,-10,0,0,0", "--json", "-").stdout)
     # TP3 by name and by its platform point in mm are the same pose (12-decimal mm string)
     np.testing.assert_allclose(a["deflection"], b["deflection"], rtol=1e-9)
     assert np.asarray(a["K"]).shape == (6, 6) and a["pose_unit"].startswith("mm")

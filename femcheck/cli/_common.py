@@ -69,3 +69,22 @@ def load_case_for(path, command: str, kinds=("haptic_6psu",)):
     if kind not in kinds:
         raise CaseError(path, "meta.kind", f"is {kind!r}; `femcheck {command}` takes {' or '.join(map(repr, kinds))} cases")
     return case
+
+
+#: help text of every ``--json OUT`` option (one meaning across the commands)
+JSON_HELP = "write the result as JSON to this file ('-': standard output)"
+
+
+def emit_json(obj, out: str, inputs=()) -> None:
+    """Write ``obj`` as JSON to the path ``out`` (atomically; never over an input) or, for ``-``, print it."""
+    import json
+
+    from femcheck.report.atomic import check_output_file, refuse_input_overwrite, write_text_atomic
+
+    text = json.dumps(obj, indent=2, default=float)
+    if out == "-":
+        typer.echo(text)
+        return
+    check_output_file(out, "--json")
+    refuse_input_overwrite(out, inputs)
+    write_text_atomic(out, text + "\n")

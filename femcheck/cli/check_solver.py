@@ -1,15 +1,17 @@
 """``femcheck check-solver [NAME …] [--mesh coarse|default|fine] [--json]``: the FE verification suite.
 
 Runs the problems registered in :mod:`femcheck.fe.checks` (all, or those named) and prints, for each,
-the computed value, its closed form, the relative error, DOFs, iterations and wall time; ``--json``
-prints a list of objects with keys name, computed, reference, rel_error, dofs, iterations, seconds.
+the computed value, its closed form, the relative error, DOFs, iterations and wall time; ``--json OUT``
+writes a list of objects with keys name, computed, reference, rel_error, tolerance, tolerance_reason,
+passed, dofs, iterations, seconds ('-': standard output). Exit 1 when a problem is outside its tolerance.
 """
 from __future__ import annotations
 
-import json
 from typing import List, Optional
 
 import typer
+
+from femcheck.cli._common import JSON_HELP, emit_json
 
 from femcheck.errors import FemcheckError
 
@@ -26,7 +28,8 @@ def run_checks(names: list[str] | None = None, mesh: str = "default"):
     unknown = [n for n in (names or []) if n not in reg]
     if unknown:
         raise FemcheckError(f"unknown check {', '.join(repr(n) for n in unknown)}; available: {', '.join(reg)}")
-    return [reg[n].run(mesh) for n in (names or list(reg))]
+    from femcheck.fe.checks import run_check
+    return [run_check(reg[n], mesh) for n in (names or list(reg))]
 
 
 def register(app: typer.Typer) -> None:
@@ -34,22 +37,32 @@ def register(app: typer.Typer) -> None:
     def check_solver(
         names: Optional[List[str]] = typer.Argument(None, help="problems to run (default: all)"),
         mesh: str = typer.Option("default", "--mesh", help="refinement: coarse | default | fine"),
-        as_json: bool = typer.Option(False, "--json", help="print a JSON list instead of a table"),
+        json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
     ) -> None:
         """Verify the FE solver against closed forms (Timoshenko, Johnson, seed 004)."""
         results = run_checks(list(names or []), mesh)
-        if as_json:
-            keys = ("name", "computed", "reference", "rel_error", "dofs", "iterations", "seconds")
-            typer.echo(json.dumps([{k: r.as_json()[k] for k in keys} | {"quantity": r.quantity, "detail": r.detail}
-                                   for r in results], indent=2, default=float))
-            return
-        from rich.console import Console
-        from rich.table import Table
+        if json_out:
+            keys = ("name", "computed", "reference", "rel_error", "tolerance", "tolerance_reason", "passed", "dofs",
+                    "iterations", "seconds")
+            emit_json([{k: r.as_json()[k] for k in keys} | {"quantity": r.quantity, "detail": r.detail} for r in results],
+                      json_out)
+        else:
+            from rich.console import Console
+            from rich.table import Table
 
-        table = Table(title=f"femcheck check-solver (mesh: {mesh})")
-        for col in ("problem", "quantity", "computed", "closed form", "rel. error", "DOFs", "iterations", "wall s"):
-            table.add_column(col, justify="left" if col in ("problem", "quantity") else "right")
-        for r in results:
-            table.add_row(r.name, r.quantity, f"{r.computed:.6g}", f"{r.reference:.6g}", f"{r.rel_error:.2e}",
-                          str(r.dofs), str(r.iterations), f"{r.seconds:.2f}")
-        Console(width=140).print(table)
+            table = Table(title=f"femcheck check-solver (mesh: {mesh})")
+            for col in ("problem", "quantity", "computed", "closed form", "rel. error", "tolerance", "result", "DOFs",
+                        "iterations", "wall s"):
+                table.add_column(col, justify="left" if col in ("problem", "quantity", "result") else "right")
+            for r in results:
+                table.add_row(r.name, r.quantity, f"{r.computed:.6g}", f"{r.reference:.6g}", f"{r.rel_error:.2e}",
+                              f"{r.tolerance:.0e}", "pass" if r.passed else "[red]FAIL[/]", str(r.dofs), str(r.iterations),
+                              f"{r.seconds:.2f}")
+            Console(width=160).print(table)
+            for r in results:
+                print(f"  {r.name}: tolerance {r.tolerance:.0e} - {r.tolerance_reason}")
+        failed = [r.name for r in results if not r.passed]
+        if failed:
+            typer.secho(f"check-solver: {len(failed)} of {len(results)} problem(s) outside tolerance: {', '.join(failed)}",
+                        err=True, fg="red")
+            raise typer.Exit(1)

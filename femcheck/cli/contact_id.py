@@ -2,12 +2,13 @@
 frequencies (seed 004 §4). Normal (1-D bar, eqs. 20–31) or tangential (FE specimen, eq. 44)."""
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Optional
 
 import typer
+
+from femcheck.cli._common import JSON_HELP, emit_json
 
 from femcheck.contact_id.bar_on_spring import ContactIdError
 
@@ -60,7 +61,7 @@ def register(app: typer.Typer) -> None:
         preloads: Optional[str] = typer.Option(None, "--preloads", "-p", help="preloads in N, 'P1,P2,...' (one per group)"),
         modes: Optional[str] = typer.Option(None, "--modes", help="1-based mode numbers of the frequencies in a group (default 1..n)"),
         mode: str = typer.Option("normal", "--mode", help="normal (1-D bar, seed 004 §4.1) or tangential (FE specimen, §4.3)"),
-        as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+        json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
         plot: Optional[Path] = typer.Option(None, "--plot", help="write a PNG of the relation and the identified points"),
     ) -> None:
         """Contact stiffness from measured natural frequencies (seed 004 §4)."""
@@ -88,9 +89,9 @@ def register(app: typer.Typer) -> None:
             refuse_input_overwrite(plot, [case])
             from femcheck.contact_id.plot import identification_png
             write_bytes_atomic(plot, identification_png(report, title=f"{case.name}: {mode} contact stiffness"))
-        if as_json:
-            out = {"case": str(case), **report.as_json(), "plot": str(plot) if plot else None}
-            typer.echo(json.dumps(_clean(out), indent=2))
+        if json_out:
+            emit_json(_clean({"case": str(case), **report.as_json(), "plot": str(plot) if plot else None}), json_out,
+                      inputs=[case])
             return
         from rich.console import Console
         from rich.table import Table

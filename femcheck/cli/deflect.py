@@ -10,12 +10,13 @@ The wrench is SI (N, N m) in the base frame at the tool point. Prints the displa
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 import typer
+
+from femcheck.cli._common import JSON_HELP, emit_json
 
 from femcheck.errors import FemcheckError
 
@@ -75,7 +76,7 @@ def register(app: typer.Typer) -> None:
         wrench: str = typer.Option(..., "--wrench", help="fx,fy,fz,mx,my,mz in N and N m (base frame, tool point)"),
         no_complementary: bool = typer.Option(False, "--no-complementary", help="neglect K_C (seed 003 eq. 14)"),
         vjm: Optional[str] = typer.Option(None, "--vjm", help="conventional | extended (default: the case's model.vjm)"),
-        as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+        json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
     ) -> None:
         """Tool-point deflection of a robot under a wrench (virtual joint method, seeds 001-003)."""
         from femcheck.case import load_case
@@ -85,8 +86,8 @@ def register(app: typer.Typer) -> None:
         case = load_case(case_path)
         W = _numbers(wrench, "--wrench", 6)
         out = deflect_case(case, pose, W, complementary=False if no_complementary else None, vjm=vjm)
-        if as_json:
-            typer.echo(json.dumps(out))
+        if json_out:
+            emit_json(out, json_out, inputs=[case_path])
             return
         from rich.console import Console
         from rich.table import Table

@@ -1,17 +1,16 @@
 """``femcheck stiffness``: 6x6 TCP stiffness, deflection and element contributions at one pose."""
 from __future__ import annotations
 
-import json
+from typing import Optional
 
 import numpy as np
 import typer
 
-from femcheck.cli._common import load_case_for
 from rich.table import Table
 
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.cli import console
-from femcheck.cli._common import Joints, ModelLevel, parse_vector, select_pose
+from femcheck.cli._common import JSON_HELP, Joints, ModelLevel, emit_json, load_case_for, parse_vector, select_pose
 from femcheck.kinematics.conditioning import DEFAULT_MAX_CONDITION, require_well_conditioned
 from femcheck.kinematics.psu6 import condition_number, leg_geometry
 
@@ -26,7 +25,7 @@ def register(app: typer.Typer) -> None:
         pose: str = typer.Option(None, "--pose", help="TCP pose x,y,z,rx,ry,rz (m, rad; rotation vector)"),
         wrench: str = typer.Option(None, "--wrench", help="TCP wrench fx,fy,fz,mx,my,mz (N, N m); default: the case's detailed test load along +z"),
         max_condition: float = typer.Option(DEFAULT_MAX_CONDITION, "--max-condition", help="refuse poses whose cond(J_h) exceeds this (singularity guard; warns above a tenth of it)"),
-        as_json: bool = typer.Option(False, "--json", help="print one JSON object: K (6x6, SI), deflection (6, m and rad), contributions"),
+        json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
     ):
         """6x6 stiffness at the TCP, deflection under a wrench, and the element contributions (seed 000 Fig. 23).
 
@@ -42,12 +41,12 @@ def register(app: typer.Typer) -> None:
         r = evaluate(case, P, W, model=model.value, joints=joints.value if joints else None, labels=[label])
         contrib = {ELEMENT_NAMES[e]: float(r.contributions[0, j]) for j, e in enumerate(ELEMENTS)
                    if r.element_energy[0, :, j].any()}
-        if as_json:
-            typer.echo(json.dumps({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model,
+        if json_out:
+            emit_json({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model,
                                    "joints": r.joints, "wrench": W.tolist(), "K": r.K[0].tolist(),
                                    "deflection": r.twist[0].tolist(), "contributions": contrib,
                                    "condition_number": float(cond.cond[0]), "max_condition": max_condition,
-                                   "warnings": warnings}))
+                                   "warnings": warnings}, json_out, inputs=[case_path])
             return
         con = console()
         for w in warnings:

@@ -1,8 +1,10 @@
 """Solver verification problems (``femcheck check-solver``): one module per problem.
 
-Each module defines ``NAME`` (e.g. ``"cantilever-solid"``) and ``run(mesh: str = "default") -> CheckResult``
-where ``mesh`` is ``"coarse" | "default" | "fine"``. The problem compares a computed value with its
-closed form (Timoshenko, Johnson, seed 004) and reports the relative error, DOFs, iterations and time.
+Each module defines ``NAME`` (e.g. ``"cantilever-solid"``), ``run(mesh: str = "default") -> CheckResult``
+where ``mesh`` is ``"coarse" | "default" | "fine"``, and ``TOLERANCE`` ({mesh: relative error}) with a
+one-line ``TOLERANCE_REASON``. The problem compares a computed value with its closed form (Timoshenko,
+Johnson, seed 004) and reports the relative error, DOFs, iterations and time; :func:`run_check` attaches
+the tolerance, so ``passed`` is decided in one place.
 """
 from __future__ import annotations
 
@@ -23,15 +25,29 @@ class CheckResult:
     iterations: int
     seconds: float
     detail: dict = dataclasses.field(default_factory=dict)
+    tolerance: float = float("nan")
+    tolerance_reason: str = ""
 
     @property
     def rel_error(self) -> float:
         return abs(self.computed - self.reference) / abs(self.reference)
 
+    @property
+    def passed(self) -> bool:
+        """Whether the relative error is within the tolerance (False when no tolerance is attached, or NaN)."""
+        return bool(self.rel_error <= self.tolerance)
+
     def as_json(self) -> dict:
         return {"name": self.name, "quantity": self.quantity, "computed": self.computed, "reference": self.reference,
-                "rel_error": self.rel_error, "dofs": self.dofs, "iterations": self.iterations,
+                "rel_error": self.rel_error, "tolerance": self.tolerance, "tolerance_reason": self.tolerance_reason,
+                "passed": self.passed, "dofs": self.dofs, "iterations": self.iterations,
                 "seconds": self.seconds, "detail": self.detail}
+
+
+def run_check(module, mesh: str = "default") -> CheckResult:
+    """Run one problem module at ``mesh`` and attach its tolerance and reason."""
+    result = module.run(mesh)
+    return dataclasses.replace(result, tolerance=float(module.TOLERANCE[mesh]), tolerance_reason=module.TOLERANCE_REASON)
 
 
 def registry() -> dict[str, object]:

@@ -9,10 +9,13 @@ The top face carries the normal load N = 1 kN as a uniform pressure; the plane y
 * slide case: the top face is displaced by U = 20 µm in x (well beyond the elastic shear of the block).
   Expected: every closed point slides and the friction force — the tangential reaction — is μN.
 
-``computed`` = Σ w ‖t‖ over the slave points in the slide case (N); reference μN. The stick case
-(friction force in x = T by equilibrium, all points STICK, residual slip) is in ``detail``. Σ w ‖t‖ rather
-than the x-resultant: the clamped lower block and the free upper block expand differently under N
-(Poisson), so part of the friction acts in y.
+``computed`` = the horizontal (x) reaction at the displaced top face in the slide case (N), from the
+global equilibrium ``r = K u - f`` at the prescribed DOFs; reference μN. Unlike Σ w ‖t‖ over the contact
+points (which the return mapping sets to μ p point by point), the reaction passes through the whole elastic
+block, the contact assembly and the solver, so a wrong friction term, normal pressure or weight shows in it.
+The clamped lower block and the free upper block expand differently under N (Poisson), so a small part of
+the friction acts in y: ``R_x`` is below μN by the cosine of that angle (< 1e-3 relative here). The stick case
+(friction force in x = T by equilibrium, all points STICK, residual slip) is in ``detail``.
 """
 from __future__ import annotations
 
@@ -36,6 +39,10 @@ MU = 0.3
 N_LOAD = 1000.0
 U_SLIDE = 20e-6
 CELLS = {"coarse": (3, 1), "default": (4, 2), "fine": (6, 2)}
+#: R_x = μN cos(angle of the y friction share): below 1e-3 relative; 1 % leaves room for the penalty's
+#: elastic slip and flags a wrong friction coefficient, normal load or reaction
+TOLERANCE = {"coarse": 1e-2, "default": 1e-2, "fine": 1e-2}
+TOLERANCE_REASON = "Coulomb sliding: R_x = μN up to the y share of friction from the Poisson mismatch (< 1e-3)"
 
 
 def build(level: str = "default", case: str = "slide", tangential_ratio: float = 0.5):
@@ -97,8 +104,12 @@ def run(mesh: str = "default") -> CheckResult:
                      "status": st.counts(s.status), "max_stick_slip_m": float(np.max(np.linalg.norm(s.slip[s.status == st.STICK], axis=1),
                                                      initial=0.0)),
                      "iterations": res.iterations_per_step, "factorizations": res.timings["factorizations"]}
+        if case == "slide":
+            X = basis.doflocs
+            top_x = np.flatnonzero(np.isclose(X[2], H, atol=1e-9 * W) & (np.arange(basis.N) % 3 == 0))
+            out[case]["top_reaction_x_N"] = float(abs(res.reactions(problem)[top_x].sum()))
         iters += sum(res.iterations_per_step)
     out["stick"]["applied_T_N"] = 0.5 * MU * N_LOAD
-    return CheckResult(name=NAME, quantity="friction force Σ w‖t‖ while sliding (N)",
-                       computed=out["slide"]["friction_magnitude_sum_N"], reference=MU * N_LOAD, dofs=int(basis.N),
+    return CheckResult(name=NAME, quantity="horizontal reaction at the displaced top face while sliding (N)",
+                       computed=out["slide"]["top_reaction_x_N"], reference=MU * N_LOAD, dofs=int(basis.N),
                        iterations=iters, seconds=time.perf_counter() - t0, detail=out)

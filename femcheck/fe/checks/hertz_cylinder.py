@@ -29,6 +29,9 @@ from femcheck.fe.elasticity import assemble_stiffness, vector_basis
 from femcheck.fe.newton import ContactProblem, solve_contact
 
 NAME = "hertz-cylinder"
+#: relative error accepted at each mesh level (``femcheck check-solver`` fails above it)
+TOLERANCE = {"coarse": 1e-2, "default": 1e-2, "fine": 1e-2}
+TOLERANCE_REASON = "contact half-width from the contact area: 0.04 % at coarse; 1 % is the issue's accuracy bar for contact checks"
 E, NU = 210e9, 0.3
 R = 5e-3
 L = 1.5e-3
