@@ -23,19 +23,22 @@ SIDE_COLOURS = {"master": "red", "slave": "royalblue"}
 
 
 def _grid(points, tets):
-    import pyvista as pv
+    from femcheck.report.offscreen import import_pyvista
+    pv = import_pyvista()
     cells = np.hstack([np.full((len(tets), 1), 4), tets]).ravel()
     return pv.UnstructuredGrid(cells, np.full(len(tets), 10, np.uint8), points)  # 10 = VTK_TETRA
 
 
 def _facets(points, facets):
-    import pyvista as pv
+    from femcheck.report.offscreen import import_pyvista
+    pv = import_pyvista()
     return pv.PolyData(points, np.hstack([np.full((len(facets), 1), 3), facets]).ravel())
 
 
 def render(mesh: PartMesh, path, window_size=(1600, 800), section_normal=(0.0, 1.0, 0.0)) -> Path:
     """Write a PNG of ``mesh`` (see module doc) to ``path`` atomically; returns the path."""
-    import pyvista as pv
+    from femcheck.report.offscreen import import_pyvista
+    pv = import_pyvista()
 
     pv.OFF_SCREEN = True
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")

@@ -23,9 +23,40 @@ app = typer.Typer(
 
 
 
+#: output options of this invocation (root options -q / -v), read by :func:`console` and :func:`progress`
+OUTPUT = {"quiet": False, "verbose": 0}
+
+
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+        try:
+            v = version("femcheck")
+        except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
+            v = "unknown (not installed)"
+        typer.echo(f"femcheck {v}")
+        raise typer.Exit(0)
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="only results and errors: no progress, no warnings"),
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="log what the library does (-v info, -vv debug)"),
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="print the version and exit"),
+) -> None:
     """femcheck: analytical stiffness models vs finite elements and measured data."""
+    OUTPUT.update(quiet=quiet, verbose=verbose)
+    level = logging.ERROR if quiet else (logging.DEBUG if verbose >= 2 else logging.INFO if verbose == 1 else logging.WARNING)
+    logging.getLogger().setLevel(level)
+    logging.getLogger("femcheck").setLevel(level)
+    # scikit-fem logs every assembly at INFO: shown from -vv on; its warnings stay visible
+    logging.getLogger("skfem").setLevel(logging.DEBUG if verbose >= 2 else logging.ERROR if quiet else logging.WARNING)
+
+
+def progress(stage: str, total, console=None):
+    """A :class:`femcheck.cli._progress.StageProgress` for a long stage (quiet under -q)."""
+    from femcheck.cli._progress import StageProgress
+    return StageProgress(stage, total, console or globals()["console"](), quiet=OUTPUT["quiet"])
 
 
 _registered = False
@@ -67,7 +98,8 @@ def _one_line(text: str) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Entry point: ``femcheck ...``. Exit codes: 0 all good, 1 a failed check, 2 bad input (a femcheck error
     prints one line, no traceback), 130 Ctrl-C (docs/errors.md)."""
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+                        datefmt="%H:%M:%S")
     _register_all()
     try:
         # standalone_mode=False makes click *return* the code of typer.Exit(n) instead of exiting:

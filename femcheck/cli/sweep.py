@@ -63,7 +63,6 @@ def register(app: typer.Typer) -> None:
         """
         from pathlib import Path
 
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
         from rich.table import Table
 
         from femcheck.cli import console
@@ -91,18 +90,15 @@ def register(app: typer.Typer) -> None:
             + f" — design {design.value}, model {model.value}"
             + (f" (FE level {fe_level_value}, mesh {mesh_value})" if model == SweepModel.fe else "")
             + f", points {','.join(pts)}")
-        with Progress(TextColumn("[bold]sweep"), BarColumn(), MofNCompleteColumn(), TextColumn("tasks"),
-                      TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=con,
-                      transient=False) as bar:
-            tid = bar.add_task("sweep", total=None)
+        from femcheck.cli import progress
+        with progress("sweep tasks", None, con) as bar:
             try:
                 outcome = run_sweep(case, ranges, out_dir, design=design.value, samples=samples, seed=seed,
                                     model=model.value, joints=joints.value if joints else None, points=pts,
                                     scheduler=scheduler, jobs=jobs, resume=resume, chunk_samples=chunk,
                                     fe_level=fe_level_value, mesh=mesh_value,
-                                    on_progress=lambda done, total: bar.update(tid, completed=done, total=total))
+                                    on_progress=lambda done, total: bar.update(completed=done, total=total))
             except KeyboardInterrupt:
-                bar.stop()
                 con.print(f"[red]interrupted[/]: the workers were stopped; finished tasks are stored in {out_dir}; "
                           "run the same command with --resume to finish")
                 raise typer.Exit(130) from None

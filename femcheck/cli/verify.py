@@ -75,16 +75,14 @@ def register(app: typer.Typer) -> None:
                 check_output_file(fe_base, "--fe-baseline")
         prepare_run_folder(out, "femcheck verify", force=force, inputs=[case_path, baseline, fe_base])
         con = console()
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
         reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")
         n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0) + \
             (2 if joint_fe and "detailed" in levels else 0)
-        with Progress(TextColumn("FE solves"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      TextColumn("{task.description}"), console=con, disable=not levels) as bar:
-            task = bar.add_task("", total=n_solves)
+        from femcheck.cli import progress
+        with progress("FE solves", n_solves, con) if levels else progress("analytical", None, con) as bar:
             run = run_verify(case, out, pts, check=check, baseline_path=baseline if (check or update_baseline) else None,
                              update_baseline=update_baseline, command="femcheck verify " + case_path, levels=levels,
-                             mesh=mesh, jobs=jobs, progress=lambda desc: bar.update(task, advance=1, description=desc),
+                             mesh=mesh, jobs=jobs, progress=lambda desc: bar.advance(1, desc),
                              fe_baseline_path=fe_base if (check or update_baseline) else None, vtu=vtu,
                              convergence_point=conv_point, joint_fe=joint_fe)
         from rich.table import Table

@@ -30,7 +30,8 @@ class Picture:
 
 
 def _as_pyvista(source):
-    import pyvista as pv
+    from femcheck.report.offscreen import import_pyvista
+    pv = import_pyvista()
 
     if isinstance(source, (str, Path)):
         return pv.read(str(source))
@@ -64,7 +65,8 @@ def render_png(source, path, scalars: str = "von_mises_Pa", warp: float = 0.0, t
 
 
 def _render_pyvista(grid, scalars, title, window_size) -> bytes:
-    import pyvista as pv
+    from femcheck.report.offscreen import import_pyvista
+    pv = import_pyvista()
 
     pv.OFF_SCREEN = True
     plotter = pv.Plotter(off_screen=True, window_size=list(window_size))

@@ -102,7 +102,8 @@ def deformed_png(model, point_result, field: str, title: str, scale: float | Non
     try:
         import warnings
 
-        import pyvista as pv
+        from femcheck.report.offscreen import import_pyvista
+        pv = import_pyvista()
         pv.OFF_SCREEN = True
         cells = np.hstack([np.full((len(tets), 1), 4), tets]).ravel()
         grid = pv.UnstructuredGrid(cells, np.full(len(tets), 10, dtype=np.uint8), points + scale * U)
