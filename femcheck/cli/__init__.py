@@ -24,8 +24,14 @@ app = typer.Typer(
 
 
 @app.callback()
-def _root() -> None:
+def _root(linear_solver: str = typer.Option(
+        None, "--linear-solver", metavar="NAME",
+        help="sparse direct solver: auto | pardiso | cholmod | mumps | superlu (default: "
+             "$FEMCHECK_LINEAR_SOLVER, else auto = PARDISO with MKL, else CHOLMOD/UMFPACK)")) -> None:
     """femcheck: analytical stiffness models vs finite elements and measured data."""
+    if linear_solver is not None:
+        from femcheck.fe.linear_solver import set_preferred
+        set_preferred(linear_solver)
 
 
 _registered = False

@@ -287,6 +287,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     and give the device's contact joints its measured slip ratio (else the theoretical 1).
     """
     t0 = time.perf_counter()
+    from femcheck.case.solver_options import apply as apply_solver_choice
+    log.info("linear solver: %s", apply_solver_choice(case))
     out = Path(out_dir)
     av = run_analytical(case, tuple(points) if points else ("P0", "P1", "P2", "P3", "P4", "P5", "P6", "P7", "P8"))
     t_analytical = time.perf_counter() - t0
