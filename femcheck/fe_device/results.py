@@ -81,6 +81,8 @@ def write_point_vtu(path, model, point_result) -> bool:
     os.close(fd)
     try:
         meshio.write(tmp, mesh, file_format="vtu")
+        from femcheck.fe.results import normal_file_mode
+        os.chmod(tmp, normal_file_mode())  # mkstemp makes 0600; a VTU is shared like any report file
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
