@@ -255,7 +255,9 @@ def _write_fe(case, av, fe, put, page, md, out, vtu: bool, pngs: bool, tilt=None
     n_vtu = 0
     if vtu:
         for p in fe.points:
-            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p]):
+            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
+                               ((case.guideway.material.E_Pa, case.guideway.material.nu),
+                                (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
                 files_vtu = f"vtu/{p}.vtu"
                 put.files.append(files_vtu)
                 n_vtu += 1
