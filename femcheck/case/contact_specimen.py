@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
+from femcheck.case.solver_options import SolverOptions
 from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "contact_specimen"
@@ -100,6 +101,7 @@ class ContactSpecimenCase(CaseVariants):
     specimen: SpecimenSection
     fe: FEOptions = FEOptions()
     identification: Identification = Identification()
+    solver: SolverOptions = SolverOptions()
     source: str = ""
     sha256: str = ""
     raw_json: str = dataclasses.field(default="", repr=False)
@@ -108,9 +110,9 @@ class ContactSpecimenCase(CaseVariants):
 
 
 
-SECTIONS = {"meta": Meta, "bar": BarSection, "specimen": SpecimenSection, "fe": FEOptions,
+SECTIONS = {"solver": SolverOptions, "meta": Meta, "bar": BarSection, "specimen": SpecimenSection, "fe": FEOptions,
             "identification": Identification}
-OPTIONAL_SECTIONS = ("meta", "fe", "identification")
+OPTIONAL_SECTIONS = ("solver", "meta", "fe", "identification")
 
 
 def build(raw: dict, path) -> ContactSpecimenCase:

@@ -14,6 +14,7 @@ from typing import Literal
 import numpy as np
 
 from femcheck.case.haptic_6psu_solid import SolidModel
+from femcheck.case.solver_options import SolverOptions
 from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
 
 CASE_KIND = "haptic_6psu"
@@ -160,6 +161,7 @@ class Haptic6PSUCase(CaseVariants):
     actuation: Actuation
     measurement: Measurement
     solid: SolidModel = SolidModel()
+    solver: SolverOptions = SolverOptions()
     source: str = ""
     sha256: str = ""
     raw_json: str = dataclasses.field(default="", repr=False)
@@ -204,14 +206,14 @@ class Haptic6PSUCase(CaseVariants):
         return np.stack([g.platform_radius_m * np.cos(th), g.platform_radius_m * np.sin(th), np.zeros(6)], axis=1)
 
 
-SECTIONS = {
+SECTIONS = {"solver": SolverOptions, 
     "meta": Meta, "model": ModelOptions, "geometry": Geometry, "workspace": Workspace, "loads": Loads,
     "guideway": Guideway, "proximal_link": ProximalLink, "spherical_joint": SphericalJoint,
     "universal_joint": UniversalJoint, "actuation": Actuation, "measurement": Measurement,
     "solid": SolidModel,
 }
 #: sections that may be absent (their fields all have defaults)
-OPTIONAL_SECTIONS = ("meta", "model", "solid")
+OPTIONAL_SECTIONS = ("solver", "meta", "model", "solid")
 
 
 def build(raw: dict, path) -> Haptic6PSUCase:

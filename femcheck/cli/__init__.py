@@ -43,9 +43,16 @@ def _root(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="only results and errors: no progress, no warnings"),
     verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="log what the library does (-v info, -vv debug)"),
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="print the version and exit"),
+    linear_solver: str = typer.Option(
+        None, "--linear-solver", metavar="NAME",
+        help="sparse direct solver: auto | pardiso | cholmod | mumps | superlu (default: "
+             "$FEMCHECK_LINEAR_SOLVER, else auto = PARDISO with MKL, else CHOLMOD/UMFPACK)"),
 ) -> None:
     """femcheck: analytical stiffness models vs finite elements and measured data."""
     OUTPUT.update(quiet=quiet, verbose=verbose)
+    if linear_solver is not None:
+        from femcheck.fe.linear_solver import set_preferred
+        set_preferred(linear_solver)
     level = logging.ERROR if quiet else (logging.DEBUG if verbose >= 2 else logging.INFO if verbose == 1 else logging.WARNING)
     logging.getLogger().setLevel(level)
     logging.getLogger("femcheck").setLevel(level)

@@ -5,7 +5,22 @@ Three paths (issue 5 item 6):
 * ``"pardiso"`` — Intel MKL PARDISO through :mod:`pypardiso` (direct, multithreaded). Symmetric matrices are
   factorized as real symmetric indefinite (``mtype=-2``, Bunch–Kaufman LDLᵀ, upper triangle only), others as
   real unsymmetric (``mtype=11``; friction makes the contact tangent unsymmetric).
-* ``"splu"`` — scipy's SuperLU (direct), used when pypardiso cannot be imported.
+* ``"cholmod"`` — SuiteSparse CHOLMOD supernodal Cholesky LLᵀ through :mod:`cvxopt` (a pip wheel with no
+  system libraries on Linux, macOS and Windows, x86-64 and ARM), for symmetric positive definite matrices.
+  An unsymmetric matrix (frictional contact tangent) or one that turns out not positive definite is
+  factorized with UMFPACK (unsymmetric multifrontal LU) from the same wheel instead, with a log line.
+* ``"umfpack"`` — SuiteSparse UMFPACK LU through :mod:`cvxopt`, any nonsingular matrix.
+* ``"mumps"`` — MUMPS through the ``python-mumps`` package (``import mumps``) when it is installed;
+  otherwise selecting it is a one-line error naming the package to install.
+* ``"superlu"`` (alias ``"splu"``) — scipy's SuperLU (direct, single-threaded, slow above ~20k unknowns:
+  measured 20–77× PARDISO on the 82k-unknown Hertz system). Used only when asked for, or by ``"auto"``
+  when neither pypardiso nor cvxopt imports — then with a warning naming what to install.
+
+``"auto"`` (issue 17): PARDISO where MKL exists, else CHOLMOD for symmetric matrices (UMFPACK for
+unsymmetric ones), else SuperLU with a warning. The process-wide choice that replaces ``"auto"`` comes from
+:func:`set_preferred` (the CLI ``--linear-solver`` option, a case file's ``[solver] linear``) or the
+environment variable ``FEMCHECK_LINEAR_SOLVER``; :func:`methods_used` lists which solvers actually ran
+(the manifest records it).
 * ``"amg-cg"`` — conjugate gradients preconditioned by one V-cycle of pyamg smoothed aggregation, for
   symmetric positive definite systems above ``iterative_above`` unknowns, where a direct factorization
   would need too much memory. Pass the rigid-body modes as ``near_nullspace`` for elasticity
@@ -28,7 +43,12 @@ import scipy.sparse.linalg as spla
 
 log = logging.getLogger(__name__)
 
-METHODS = ("auto", "pardiso", "splu", "amg-cg")
+METHODS = ("auto", "pardiso", "cholmod", "umfpack", "mumps", "superlu", "splu", "amg-cg")
+#: the values of a case file's ``[solver] linear`` and of ``--linear-solver`` (issue 17 contract)
+CHOICES = ("auto", "pardiso", "cholmod", "mumps", "superlu", "umfpack")
+ENV_VAR = "FEMCHECK_LINEAR_SOLVER"
+_preferred: str | None = None
+_used: dict[str, int] = {}
 #: above this many unknowns "auto" takes the iterative path (if the matrix is symmetric)
 ITERATIVE_ABOVE = 400_000
 
@@ -44,6 +64,70 @@ def pardiso_available() -> bool:
     return True
 
 
+@functools.lru_cache(maxsize=1)
+def cvxopt_available() -> bool:
+    """True when cvxopt (CHOLMOD + UMFPACK) imports."""
+    try:
+        import cvxopt.cholmod  # noqa: F401
+        import cvxopt.umfpack  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+def mumps_available() -> bool:
+    try:
+        import mumps  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+def set_preferred(name: str | None) -> None:
+    """Make ``name`` what ``"auto"`` means for the rest of the process (None: back to the automatic
+    choice). Raises :class:`femcheck.errors.FemcheckError` naming the expected values."""
+    import os
+    global _preferred
+    if name is not None:
+        name = _check_choice(name, "linear solver")
+    _preferred = None if name in (None, "auto") else name
+    if _preferred is not None:  # worker processes (--jobs) inherit the choice through the environment
+        os.environ[ENV_VAR] = _preferred
+
+
+def preferred() -> str:
+    """The explicit choice in force: :func:`set_preferred`, else ``$FEMCHECK_LINEAR_SOLVER``, else "auto"."""
+    import os
+    if _preferred is not None:
+        return _preferred
+    env = os.environ.get(ENV_VAR, "").strip()
+    return _check_choice(env, f"environment variable {ENV_VAR}") if env else "auto"
+
+
+def _check_choice(name: str, where: str) -> str:
+    name = str(name).strip().lower()
+    if name == "splu":
+        name = "superlu"
+    if name not in CHOICES:
+        from femcheck.errors import FemcheckError
+        raise FemcheckError(f"{where} = {name!r}; expected one of {', '.join(CHOICES)}")
+    return name
+
+
+def describe() -> dict:
+    """What the manifest records: the choice in force, what "auto" resolves to here for a symmetric and
+    an unsymmetric system, and the factorizations made in this process by solver."""
+    choice = preferred()
+    return {"choice": choice,
+            "symmetric": choose_method(1, True, choice), "unsymmetric": choose_method(1, False, choice),
+            "factorizations_in_process": methods_used()}
+
+
+def methods_used() -> dict[str, int]:
+    """Factorizations made in this process, by the solver that actually ran (e.g. ``{"cholmod": 3}``)."""
+    return dict(_used)
+
+
 def is_symmetric(A, rtol: float = 1e-10) -> bool:
     """max|A − Aᵀ| ≤ rtol · max|A| (one pass over the nonzeros)."""
     A = sp.csr_matrix(A)
@@ -57,11 +141,39 @@ def choose_method(n: int, symmetric: bool, method: str = "auto", iterative_above
     """The method "auto" resolves to for an ``n × n`` matrix (see module docstring)."""
     if method not in METHODS:
         raise ValueError(f"linear solver method = {method!r}; expected one of {', '.join(METHODS)}")
+    if method == "splu":
+        method = "superlu"
+    if method == "auto":
+        method = preferred()
     if method != "auto":
+        if method == "pardiso" and not pardiso_available():
+            from femcheck.errors import FemcheckError
+            raise FemcheckError("linear solver 'pardiso' needs Intel MKL: pip install pypardiso (x86-64 only)")
+        if method in ("cholmod", "umfpack") and not cvxopt_available():
+            from femcheck.errors import FemcheckError
+            raise FemcheckError(f"linear solver {method!r} needs cvxopt: pip install cvxopt")
+        if method == "mumps" and not mumps_available():
+            from femcheck.errors import FemcheckError
+            raise FemcheckError("linear solver 'mumps' needs python-mumps: pip install python-mumps "
+                                "(or conda install -c conda-forge python-mumps)")
+        if method == "cholmod" and not symmetric:
+            return "umfpack"
         return method
     if symmetric and n > iterative_above:
         return "amg-cg"
-    return "pardiso" if pardiso_available() else "splu"
+    if pardiso_available():
+        return "pardiso"
+    if cvxopt_available():
+        return "cholmod" if symmetric else "umfpack"
+    _warn_superlu()
+    return "superlu"
+
+
+@functools.lru_cache(maxsize=1)
+def _warn_superlu() -> None:
+    log.warning("no fast sparse solver found: using scipy SuperLU (20-77x slower than PARDISO above 40k "
+                "unknowns); install cvxopt (pip install cvxopt: CHOLMOD/UMFPACK, every platform) or "
+                "pypardiso (x86-64 with MKL)")
 
 
 class Factorization:
@@ -98,7 +210,20 @@ class Factorization:
                 self._solver = pypardiso.PyPardisoSolver(mtype=11)
                 self._A = A
             self._solver.factorize(self._A)
-        elif self.method == "splu":
+        elif self.method == "cholmod":
+            try:
+                self._F = _cholmod_factor(A)
+            except ArithmeticError:  # not positive definite: LU from the same library
+                log.info("CHOLMOD: matrix not positive definite; factorizing with UMFPACK instead")
+                self.method = "umfpack"
+                self._cvA, self._F = _umfpack_factor(A)
+        elif self.method == "umfpack":
+            self._cvA, self._F = _umfpack_factor(A)
+        elif self.method == "mumps":
+            import mumps
+            self._ctx = mumps.Context()
+            self._ctx.factor(A.tocoo(), ordering="auto")
+        elif self.method == "superlu":
             self._lu = spla.splu(A.tocsc(), permc_spec="COLAMD" if not self.symmetric else "MMD_AT_PLUS_A")
         else:
             import pyamg
@@ -107,6 +232,7 @@ class Factorization:
             self._ml = pyamg.smoothed_aggregation_solver(A, B=B, symmetry="symmetric", max_coarse=500)
             self._M = self._ml.aspreconditioner(cycle="V")
         self.seconds = time.perf_counter() - t0
+        _used[self.method] = _used.get(self.method, 0) + 1
         log.info("factorized %d x %d (nnz %d, symmetric=%s) with %s in %.3f s",
                  self.n, self.n, A.nnz, self.symmetric, self.method, self.seconds)
 
@@ -119,9 +245,24 @@ class Factorization:
             x = self._solver.solve(self._A, b)
             self.iterations = 1
             return np.asarray(x).reshape(b.shape)
-        if self.method == "splu":
+        if self.method == "superlu":
             self.iterations = 1
             return self._lu.solve(b)
+        if self.method in ("cholmod", "umfpack"):
+            import cvxopt
+            B = cvxopt.matrix(np.asfortranarray(b.reshape(self.n, -1)))
+            if self.method == "cholmod":
+                import cvxopt.cholmod
+                cvxopt.cholmod.solve(self._F, B)
+            else:
+                import cvxopt.umfpack
+                cvxopt.umfpack.solve(self._cvA, self._F, B)
+            self.iterations = 1
+            return np.array(B).reshape(b.shape)
+        if self.method == "mumps":
+            self.iterations = 1
+            cols = b.reshape(self.n, -1)
+            return np.column_stack([self._ctx.solve(cols[:, j]) for j in range(cols.shape[1])]).reshape(b.shape)
         cols = b.reshape(self.n, -1)
         out = np.empty_like(cols)
         its = 0
@@ -158,6 +299,29 @@ class Factorization:
 
     def __repr__(self) -> str:
         return f"Factorization(n={self.n}, method={self.method!r}, seconds={self.seconds:.3g})"
+
+
+def _cvxopt_sparse(A):
+    import cvxopt
+    c = A.tocoo()
+    return cvxopt.spmatrix(c.data.astype(float), c.row.astype(int), c.col.astype(int), c.shape)
+
+
+def _cholmod_factor(A):
+    """Supernodal LLᵀ of the lower triangle of symmetric A (CHOLMOD picks AMD/METIS ordering)."""
+    import cvxopt.cholmod
+    cvxopt.cholmod.options["supernodal"] = 2
+    cvxopt.cholmod.options["postorder"] = True
+    L = _cvxopt_sparse(sp.tril(A, format="csr"))
+    F = cvxopt.cholmod.symbolic(L, uplo="L")
+    cvxopt.cholmod.numeric(L, F)
+    return F
+
+
+def _umfpack_factor(A):
+    import cvxopt.umfpack
+    M = _cvxopt_sparse(A)
+    return M, cvxopt.umfpack.numeric(M, cvxopt.umfpack.symbolic(M))
 
 
 def factorize(A, method: str = "auto", **kwargs) -> Factorization:

@@ -4,7 +4,16 @@ The solid fields are recovered from the condensed solution: for a part with refe
 u_ref (in the part frame), the vertex displacements are u = X u_ref (``SuperElement.recovery``), rotated
 to U. Detailed-level fields follow the eq. 1 protocol: (state at P_p + P_T) − (state at P_p).
 One VTU per test point holds the mesh of the six guideways and six links (world frame U, m, linear
-tetrahedra) and one displacement field per (level, joints, direction), named ``u_<level>_<joints>_<dir>``.
+tetrahedra) and one displacement field per (level, joints, direction), named ``u_<level>_<joints>_<dir>``,
+and per load case (issue 17) the cell fields ``von_mises_<...>_Pa`` and ``strain_energy_density_<...>_J_m3``
+(w = ½ σ:ε) of the linear-tetrahedron interpolation of the vertex displacements (constant strain per
+tetrahedron, so a smoothed view of the P2 part solution, not its exact stress), and the point field
+``clamp_reaction_<...>_N`` (N, 3): the force the rail clamp exerts on guideway i, from the equilibrium of the
+cantilever from A_i to the slider B: F_A = −F_B with (F_B, M_B) = K_lg u_B (exact for any K_lg), shared
+equally by the vertices of the clamped face z = 0 of each guideway (so each leg's vertices sum to F_A and all
+six to minus the applied force; the traction distribution over the face is not recovered from the condensed
+model, and the clamp moment M_A = −(M_B + (B − A) × F_B) is in :func:`clamp_reactions`, not in the VTU,
+because meshio's VTU writer drops field data).
 """
 from __future__ import annotations
 
@@ -66,21 +75,83 @@ def point_fields(model, point_result):
     return np.vstack(pts), np.vstack(tets), np.concatenate(part), np.concatenate(leg), fields
 
 
-def write_point_vtu(path, model, point_result) -> bool:
-    """Write the VTU of one point atomically (temporary file + rename). False when there is no solid mesh."""
+def clamp_reactions(model, point_result) -> dict:
+    """{"<level>_<joints>_<dir>": (6, 6)}: per leg the rail clamp's force (N) and moment about A_i (N·m) on
+    guideway i, frame U, for the load-case increment (module docstring). Σ_i F_A,i = −applied force."""
+    out = {}
+    for (lvl, j, d), res in point_result.cases.items():
+        nodes = _case_nodes(res)
+        rows = np.zeros((6, 6))
+        for i, g in enumerate(model.guideways):
+            R = model.R_A[i]
+            w = g.K @ (rot6(R).T @ nodes["B_g"][i])  # (F_B, M_B) in the guideway frame
+            F, M = w[:3], w[3:]
+            rows[i, :3] = R @ -F
+            rows[i, 3:] = R @ -(M + np.cross(g.ref_points[0], F))
+        out[f"{lvl}_{j}_{d}"] = rows
+    return out
+
+
+def tet_fields(points, tets, U, E, nu):
+    """Constant-strain stress measures of the linear tetrahedra for vertex displacements U (N, 3) m:
+    von Mises σ_vM (Pa) and strain-energy density w = ½ σ:ε (J/m³), each (M,); E, nu per tet (M,)."""
+    X = points[tets]  # (M, 4, 3)
+    D = X[:, 1:] - X[:, :1]  # (M, 3, 3) edge vectors
+    dU = U[tets][:, 1:] - U[tets][:, :1]
+    grad = np.linalg.solve(D, dU).transpose(0, 2, 1)  # ∂u_i/∂x_j: D G = dU with G_ji = ∂u_i/∂x_j
+    eps = 0.5 * (grad + grad.transpose(0, 2, 1))
+    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = E / (2 * (1 + nu))
+    tr = np.trace(eps, axis1=1, axis2=2)
+    sig = 2 * mu[:, None, None] * eps + (lam * tr)[:, None, None] * np.eye(3)
+    dev = sig - np.trace(sig, axis1=1, axis2=2)[:, None, None] / 3 * np.eye(3)
+    vm = np.sqrt(1.5 * np.einsum("mij,mij->m", dev, dev))
+    return vm, 0.5 * np.einsum("mij,mij->m", sig, eps)
+
+
+def write_point_vtu(path, model, point_result, materials=None) -> bool:
+    """Write the VTU of one point atomically (temporary file + rename). False when there is no solid mesh.
+
+    materials: ((E_guideway, nu_guideway), (E_link, nu_link)) Pa, - for the stress and energy fields
+    (omitted when None)."""
     import meshio
     got = point_fields(model, point_result)
     if got is None:
         return False
     points, tets, part, leg, fields = got
-    mesh = meshio.Mesh(points, [("tetra", tets)], point_data={k: v.astype(np.float32) for k, v in fields.items()},
-                       cell_data={"part": [part.astype(np.int32)], "leg": [leg.astype(np.int32)]})
+    cell_data = {"part": [part.astype(np.int32)], "leg": [leg.astype(np.int32)]}
+    if materials is not None:
+        E = np.where(part == 0, materials[0][0], materials[1][0]).astype(float)
+        nu = np.where(part == 0, materials[0][1], materials[1][1]).astype(float)
+        for name, U in fields.items():
+            vm, w = tet_fields(points, tets, U, E, nu)
+            cell_data[f"von_mises_{name[2:]}_Pa"] = [vm]
+            cell_data[f"strain_energy_density_{name[2:]}_J_m3"] = [w]
+    point_data = {k: v.astype(np.float32) for k, v in fields.items()}
+    clamp_face, off = [], 0  # (leg, vertex indices of the clamped face z = 0 of its guideway)
+    link = model.link
+    for i in range(6):
+        for se in (model.guideways[i], link):
+            if len(se.vertices) == 0:
+                continue
+            if se is model.guideways[i]:
+                clamp_face.append((i, off + np.flatnonzero(np.abs(se.vertices[:, 2]) <= 1e-9)))
+            off += len(se.vertices)
+    for name, rows in clamp_reactions(model, point_result).items():
+        r = np.zeros((len(points), 3))
+        for i, idx in clamp_face:
+            if idx.size:
+                r[idx] = rows[i, :3] / idx.size
+        point_data[f"clamp_reaction_{name}_N"] = r
+    mesh = meshio.Mesh(points, [("tetra", tets)], point_data=point_data, cell_data=cell_data)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".vtu", dir=path.parent)
     os.close(fd)
     try:
         meshio.write(tmp, mesh, file_format="vtu")
+        from femcheck.fe.results import normal_file_mode
+        os.chmod(tmp, normal_file_mode())  # mkstemp makes 0600; a VTU is shared like any report file
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -6,7 +6,7 @@ import importlib.metadata as md
 import os
 import platform
 
-PACKAGES = ("femcheck", "numpy", "scipy", "numba", "scikit-fem", "pytetwild", "trimesh", "meshio", "pyvista", "matplotlib")
+PACKAGES = ("femcheck", "numpy", "scipy", "cvxopt", "pypardiso", "numba", "scikit-fem", "pytetwild", "trimesh", "meshio", "pyvista", "matplotlib")
 
 
 def package_versions() -> dict[str, str]:
@@ -29,4 +29,5 @@ def base_manifest(case, command: str) -> dict:
         "packages": package_versions(),
         "python": platform.python_version(),
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},
+        "linear_solver": __import__("femcheck.fe.linear_solver", fromlist=["describe"]).describe(),
     }

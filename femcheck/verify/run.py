@@ -255,7 +255,9 @@ def _write_fe(case, av, fe, put, page, md, out, vtu: bool, pngs: bool, tilt=None
     n_vtu = 0
     if vtu:
         for p in fe.points:
-            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p]):
+            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
+                               ((case.guideway.material.E_Pa, case.guideway.material.nu),
+                                (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
                 files_vtu = f"vtu/{p}.vtu"
                 put.files.append(files_vtu)
                 n_vtu += 1
@@ -287,6 +289,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     and give the device's contact joints its measured slip ratio (else the theoretical 1).
     """
     t0 = time.perf_counter()
+    from femcheck.case.solver_options import apply as apply_solver_choice
+    log.info("linear solver: %s", apply_solver_choice(case))
     out = Path(out_dir)
     av = run_analytical(case, tuple(points) if points else ("P0", "P1", "P2", "P3", "P4", "P5", "P6", "P7", "P8"))
     t_analytical = time.perf_counter() - t0
