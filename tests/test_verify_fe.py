@@ -30,18 +30,18 @@ def test_ci_subset_coarse_verify_check(tmp_path):
     assert "no drift" in out and "within thresholds" in out
     with open(tmp_path / "errors_simplified.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error"]
+    assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error_pct"]
     assert len(rows) == 2 * 3 * 2  # points x directions x idealizations
     for r in rows:
         # the simplified FE follows the matching analytical idealization (issue 6 acceptance: mean <= 5 %)
-        assert float(r["rel_error"]) < ERROR_THRESHOLDS["simplified"], r
+        assert float(r["rel_error_pct"]) < 100 * ERROR_THRESHOLDS["simplified"], r  # CSV is in %, like the tables
     with open(tmp_path / "errors_detailed.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error"]
-    released = [float(r["rel_error"]) for r in rows if r["joints"] == "released"]
-    rigid = [float(r["rel_error"]) for r in rows if r["joints"] == "rigid"]
+    assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error_pct"]
+    released = [float(r["rel_error_pct"]) for r in rows if r["joints"] == "released"]
+    rigid = [float(r["rel_error_pct"]) for r in rows if r["joints"] == "rigid"]
     # the contact-joint FE follows 'released' (measured < 1 %), far from 'rigid' (10-70 %, mean > 40 %)
-    assert max(released) < 0.02 and sum(rigid) / len(rigid) > 0.3
+    assert max(released) < 2.0 and sum(rigid) / len(rigid) > 30.0
     m = json.loads((tmp_path / "manifest.json").read_text())
     assert m["fe"]["mesh_level"] == "coarse" and m["fe"]["dofs"]["link"] > 0
     assert m["fe"]["contact_joints"]["follows"] == "released"
@@ -84,4 +84,4 @@ def test_run_fe_with_beam_parts_matches_the_analytical_simplified_model(case):
     assert len(calls) == 1 + 6 * 2
     rows = fe_error_rows(run_analytical(case, ("P0", "P3")), fe, "simplified")
     # same equations (beam element = closed-form cantilever): round-off only
-    assert max(r["rel_error"] for r in rows) < 1e-9
+    assert max(r["rel_error_pct"] for r in rows) < 1e-7  # 1e-9 relative, in %

@@ -1,9 +1,7 @@
 """Run every bench area (or those named on the command line) and write reports/bench/<area>.json."""
 from __future__ import annotations
 
-import importlib
 import json
-import pkgutil
 import platform
 import sys
 import time
@@ -16,13 +14,8 @@ from femcheck.report.atomic import write_text_atomic
 
 
 def _areas():
-    import femcheck.bench as pkg
-    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        mod = importlib.import_module(f"femcheck.bench.{info.name}")
-        if hasattr(mod, "run") and hasattr(mod, "AREA"):
-            yield mod
+    from femcheck.registry import plugins
+    return plugins("femcheck.bench", ("run", "AREA"))
 
 
 def main(argv=None) -> int:

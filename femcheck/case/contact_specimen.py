@@ -6,12 +6,11 @@ Each TOML table becomes one frozen dataclass; :class:`ContactSpecimenCase` holds
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
 from femcheck.case.solver_options import SolverOptions
-from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseRecord, Material, build_sectioned, option, quantity
 
 CASE_KIND = "contact_specimen"
 
@@ -92,7 +91,7 @@ class Identification:
 
 
 @dataclass(frozen=True)
-class ContactSpecimenCase(CaseVariants):
+class ContactSpecimenCase(CaseRecord):
     """A validated contact-identification case. Immutable; variants via :meth:`with_params`."""
 
     meta: Meta
@@ -102,9 +101,6 @@ class ContactSpecimenCase(CaseVariants):
     fe: FEOptions = FEOptions()
     identification: Identification = Identification()
     solver: SolverOptions = SolverOptions()
-    source: str = ""
-    sha256: str = ""
-    raw_json: str = dataclasses.field(default="", repr=False)
 
     kind = CASE_KIND
 
@@ -117,7 +113,4 @@ OPTIONAL_SECTIONS = ("solver", "meta", "fe", "identification")
 
 def build(raw: dict, path) -> ContactSpecimenCase:
     """Validate a parsed TOML document into a :class:`ContactSpecimenCase` (errors name file and key)."""
-    ctx = Context(path)
-    ctx.materials = build_materials(ctx, raw.get("materials"))
-    parts = build_sections(ctx, raw, SECTIONS, OPTIONAL_SECTIONS, also_allowed=("materials",))
-    return ContactSpecimenCase(materials=tuple(ctx.materials.values()), **parts)
+    return build_sectioned(ContactSpecimenCase, raw, path, SECTIONS, OPTIONAL_SECTIONS)

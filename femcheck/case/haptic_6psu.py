@@ -6,7 +6,6 @@ values, never stored twice.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -15,7 +14,7 @@ import numpy as np
 
 from femcheck.case.haptic_6psu_solid import SolidModel
 from femcheck.case.solver_options import SolverOptions
-from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, Material, build_materials, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseRecord, Material, build_sectioned, option, quantity
 
 CASE_KIND = "haptic_6psu"
 
@@ -145,7 +144,7 @@ class Measurement:
 
 
 @dataclass(frozen=True)
-class Haptic6PSUCase(CaseVariants):
+class Haptic6PSUCase(CaseRecord):
     """A validated 6-PSU device case. Immutable; variants via :meth:`with_params`."""
 
     meta: Meta
@@ -162,9 +161,6 @@ class Haptic6PSUCase(CaseVariants):
     measurement: Measurement
     solid: SolidModel = SolidModel()
     solver: SolverOptions = SolverOptions()
-    source: str = ""
-    sha256: str = ""
-    raw_json: str = dataclasses.field(default="", repr=False)
 
     kind = CASE_KIND
 
@@ -218,7 +214,4 @@ OPTIONAL_SECTIONS = ("solver", "meta", "model", "solid")
 
 def build(raw: dict, path) -> Haptic6PSUCase:
     """Validate a parsed TOML document into a :class:`Haptic6PSUCase` (errors name file and key)."""
-    ctx = Context(path)
-    ctx.materials = build_materials(ctx, raw.get("materials"))
-    parts = build_sections(ctx, raw, SECTIONS, OPTIONAL_SECTIONS, also_allowed=("materials",))
-    return Haptic6PSUCase(materials=tuple(ctx.materials.values()), **parts)
+    return build_sectioned(Haptic6PSUCase, raw, path, SECTIONS, OPTIONAL_SECTIONS)

@@ -14,13 +14,12 @@ The leg layout is documented in :mod:`femcheck.vjm.rcube_geometry`.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, build_section, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseRecord, Context, build_section, build_sections, option, quantity
 from femcheck.vjm.rcube_geometry import RCubeGeometry
 
 CASE_KIND = "parallel_vjm"
@@ -92,7 +91,7 @@ class TestPoint:
 
 
 @dataclass(frozen=True)
-class ParallelVJMCase(CaseVariants):
+class ParallelVJMCase(CaseRecord):
     """A validated parallel VJM case. Immutable."""
 
     meta: Meta
@@ -100,9 +99,6 @@ class ParallelVJMCase(CaseVariants):
     links: Links
     fitting: Fitting
     test_points: tuple[TestPoint, ...]
-    source: str = ""
-    sha256: str = ""
-    raw_json: str = dataclasses.field(default="", repr=False)
 
     kind = CASE_KIND
 

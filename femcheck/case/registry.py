@@ -10,26 +10,22 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import importlib
 import json
-import pkgutil
 import tomllib
 from pathlib import Path
 
 from femcheck.errors import CaseError
+from femcheck.registry import plugin, plugins
 
 _KINDS: dict[str, object] = {}
+_REQUIRED = ("CASE_KIND", "build")
 
 
 def case_kind_module(kind: str):
     """The module of case kind ``kind`` or None."""
     if kind not in _KINDS:
-        import femcheck.case as pkg
-        names = {info.name for info in pkgutil.iter_modules(pkg.__path__)}
-        if kind not in names:
-            return None
-        mod = importlib.import_module(f"femcheck.case.{kind}")
-        if getattr(mod, "CASE_KIND", None) != kind or not hasattr(mod, "build"):
+        mod = plugin("femcheck.case", kind, _REQUIRED)
+        if mod is None or mod.CASE_KIND != kind:
             return None
         _KINDS[kind] = mod
     return _KINDS[kind]
@@ -37,15 +33,8 @@ def case_kind_module(kind: str):
 
 def case_kinds() -> list[str]:
     """Names of the case kinds in the package (modules defining CASE_KIND and build)."""
-    import femcheck.case as pkg
-    kinds = []
-    for info in pkgutil.iter_modules(pkg.__path__):
-        try:
-            if case_kind_module(info.name) is not None:
-                kinds.append(info.name)
-        except Exception:  # a broken module is reported when its kind is requested
-            continue
-    return sorted(kinds)
+    # a broken module is left out here and reported when its kind is requested
+    return sorted(m.CASE_KIND for m in plugins("femcheck.case", _REQUIRED, skip_broken=True))
 
 
 def _digest(raw: dict) -> str:

@@ -218,6 +218,26 @@ class CaseVariants:
 
 
 @dataclasses.dataclass(frozen=True)
+class CaseRecord(CaseVariants):
+    """Base of every case object: where it came from (``source``), the sha256 of its parsed document and the
+    document as JSON (filled in by :func:`femcheck.case.registry.build_case`; keyword-only, so a kind's own
+    required fields come first), and :meth:`with_params`."""
+
+    source: str = dataclasses.field(default="", kw_only=True)
+    sha256: str = dataclasses.field(default="", kw_only=True)
+    raw_json: str = dataclasses.field(default="", repr=False, kw_only=True)
+
+
+def build_sectioned(cls: type, raw: dict, path, sections: dict[str, type], optional=()):
+    """The common ``build()`` of a case kind made of a ``[materials]`` table and sections: validate them and
+    construct ``cls(materials=..., **sections)`` (errors name the file and dotted key)."""
+    ctx = Context(path)
+    ctx.materials = build_materials(ctx, raw.get("materials"))
+    parts = build_sections(ctx, raw, sections, optional, also_allowed=("materials",))
+    return cls(materials=tuple(ctx.materials.values()), **parts)
+
+
+@dataclasses.dataclass(frozen=True)
 class CaseMeta:
     """The ``[meta]`` table every case kind shares: what the case is and where its numbers come from."""
 

@@ -26,7 +26,7 @@ from typing import Literal
 
 import numpy as np
 
-from femcheck.case.schema import CaseMeta as Meta, CaseVariants, Context, build_section, build_sections, option, quantity
+from femcheck.case.schema import CaseMeta as Meta, CaseRecord, Context, build_section, build_sections, option, quantity
 from femcheck.vjm import drive_train as dt
 from femcheck.vjm.dh import DHChain
 from femcheck.vjm.serial_vjm import SerialVJM
@@ -142,7 +142,7 @@ class Identification:
 
 
 @dataclass(frozen=True)
-class SerialRobotCase(CaseVariants):
+class SerialRobotCase(CaseRecord):
     """A validated serial-robot VJM case. Immutable."""
 
     meta: Meta
@@ -150,9 +150,6 @@ class SerialRobotCase(CaseVariants):
     kinematics: Kinematics
     joints: tuple[Joint, ...]
     identification: Identification | None = None
-    source: str = ""
-    sha256: str = ""
-    raw_json: str = dataclasses.field(default="", repr=False)
 
     kind = CASE_KIND
 

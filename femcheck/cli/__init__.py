@@ -82,13 +82,9 @@ def _register_all() -> None:
     global _registered
     if _registered:
         return
-    import femcheck.cli as pkg
-    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        mod = importlib.import_module(f"femcheck.cli.{info.name}")
-        if hasattr(mod, "register"):
-            mod.register(app)
+    from femcheck.registry import plugins
+    for mod in plugins("femcheck.cli", ("register",)):
+        mod.register(app)
     _registered = True
 
 

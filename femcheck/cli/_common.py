@@ -49,14 +49,11 @@ def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, 
 
 def direction_vector(direction: str) -> np.ndarray:
     """'+x', '-y', 'z', ... -> unit 3-vector."""
-    d = direction.strip().lower()
-    sign = -1.0 if d.startswith("-") else 1.0
-    axis = d.lstrip("+-")
-    if axis not in ("x", "y", "z"):
-        raise typer.BadParameter(f"direction {direction!r}; expected x, y or z with an optional sign")
-    v = np.zeros(3)
-    v["xyz".index(axis)] = sign
-    return v
+    from femcheck.kinematics.directions import direction_unit
+    try:
+        return direction_unit(direction)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
 
 
 def load_case_for(path, command: str, kinds=("haptic_6psu",)):

@@ -30,9 +30,10 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, BilinearForm, ElementHex1, ElementHex2, ElementVector, FacetBasis, MeshHex, asm
 from skfem.helpers import dot
-from skfem.models.elasticity import lame_parameters, linear_elasticity
+from skfem.models.elasticity import linear_elasticity
 
 from femcheck.contact_id.bar_on_spring import ContactIdError
+from femcheck.fe.elasticity import lame
 from femcheck.fe.modal import ModalResult, natural_frequencies
 
 log = logging.getLogger(__name__)
@@ -147,7 +148,7 @@ def assemble_block(dims_m, divisions, E_Pa: float, nu: float, density_kg_m3: flo
     axes = [_axis_nodes(dims[i], div[i], cuts[i]) for i in range(3)]
     mesh = MeshHex.init_tensor(*axes)
     basis = Basis(mesh, ElementVector(ELEMENTS[element]()), intorder=INTORDER[element])
-    lam, mu = lame_parameters(E_Pa, nu)
+    lam, mu = (float(v) for v in lame(E_Pa, nu))  # the one Lamé conversion (femcheck.fe.elasticity)
     K = asm(linear_elasticity(lam, mu), basis).tocsr()
     M = asm(mass_form(density_kg_m3), basis).tocsr()
     log.debug("block %s m, %d elements (%s), %d dofs", dims, mesh.nelements, element, basis.N)

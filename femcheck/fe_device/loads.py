@@ -26,6 +26,7 @@ import numpy as np
 
 from femcheck.errors import ConvergenceError
 from femcheck.fe_device.joints import joint_layout
+from femcheck.kinematics.directions import direction_unit as _direction_unit
 from femcheck.fe_device.leg_model import condense_legs
 from femcheck.fe_device.substructure import solve_platform
 
@@ -36,12 +37,8 @@ MAX_ITERATIONS = 200
 
 
 def direction_unit(direction: str) -> np.ndarray:
-    """'+x' -> (1, 0, 0), '-z' -> (0, 0, -1)."""
-    if len(direction) != 2 or direction[0] not in "+-" or direction[1] not in "xyz":
-        raise ValueError(f"direction = {direction!r}; expected one of +x, +y, +z, -x, -y, -z")
-    v = np.zeros(3)
-    v["xyz".index(direction[1])] = -1.0 if direction[0] == "-" else 1.0
-    return v
+    """'+x' -> (1, 0, 0), '-z' -> (0, 0, -1) (signed form only; :mod:`femcheck.kinematics.directions`)."""
+    return _direction_unit(direction, sign_required=True)
 
 
 def hertz_approach(F, E_star, R_star):

@@ -27,6 +27,7 @@ import logging
 import numpy as np
 
 from femcheck.errors import FemcheckError
+from femcheck.kinematics.directions import direction_unit
 from femcheck.sweep.sample_chunk import SampleChunk
 
 log = logging.getLogger(__name__)
@@ -39,11 +40,7 @@ def dir_tag(direction: str) -> str:
     return ("neg" if direction.startswith("-") else "") + direction.lstrip("+-")
 
 
-def dir_vector(direction: str) -> np.ndarray:
-    """'+x' | '-y' | ... -> unit 3-vector."""
-    v = np.zeros(3)
-    v["xyz".index(direction.lstrip("+-"))] = -1.0 if direction.startswith("-") else 1.0
-    return v
+dir_vector = direction_unit  # '+x' | '-y' | ... -> unit 3-vector (femcheck.kinematics.directions)
 
 
 @dataclasses.dataclass(frozen=True)

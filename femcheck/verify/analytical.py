@@ -12,16 +12,10 @@ import numpy as np
 
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.kinematics.psu6 import POINT_LABELS, condition_number, leg_geometry, test_points
+from femcheck.kinematics.directions import direction_unit
 
 LEVELS = ("simplified", "detailed")
 JOINTS = ("rigid", "released")
-
-
-def direction_unit(direction: str) -> np.ndarray:
-    """'+x' -> (1, 0, 0), '-z' -> (0, 0, -1)."""
-    v = np.zeros(3)
-    v["xyz".index(direction[-1])] = -1.0 if direction.startswith("-") else 1.0
-    return v
 
 
 @dataclasses.dataclass(frozen=True)

@@ -44,7 +44,7 @@ def moment_demand(case, points=None, load_N: float | None = None) -> MomentDeman
     vectorized model call per direction.
     """
     from femcheck.chain import evaluate
-    from femcheck.fe_device.loads import direction_unit
+    from femcheck.kinematics.directions import direction_unit
     from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
 
     labels = list(points or POINT_LABELS)

@@ -8,8 +8,6 @@ effect is adding a module.
 from __future__ import annotations
 
 import dataclasses
-import importlib
-import pkgutil
 
 import numpy as np
 
@@ -79,14 +77,8 @@ class Effect:
 
 
 def _discover() -> dict[str, Effect]:
-    import femcheck.diagnose.effects as pkg
-    out = {}
-    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        mod = importlib.import_module(f"{pkg.__name__}.{info.name}")
-        eff = getattr(mod, "EFFECT", None)
-        if eff is not None:
-            out[eff.id] = eff
-    return out
+    from femcheck.registry import plugins
+    return {mod.EFFECT.id: mod.EFFECT for mod in plugins(__name__, ("EFFECT",)) if mod.EFFECT is not None}
 
 
 _REGISTRY: dict[str, Effect] | None = None

@@ -9,8 +9,6 @@ the tolerance, so ``passed`` is decided in one place.
 from __future__ import annotations
 
 import dataclasses
-import importlib
-import pkgutil
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,10 +50,5 @@ def run_check(module, mesh: str = "default") -> CheckResult:
 
 def registry() -> dict[str, object]:
     """{NAME: module} of every verification problem in this package, in name order."""
-    found = {}
-    import femcheck.fe.checks as pkg
-    for info in pkgutil.iter_modules(pkg.__path__):
-        mod = importlib.import_module(f"femcheck.fe.checks.{info.name}")
-        if hasattr(mod, "NAME") and hasattr(mod, "run"):
-            found[mod.NAME] = mod
-    return dict(sorted(found.items()))
+    from femcheck.registry import plugins
+    return dict(sorted((mod.NAME, mod) for mod in plugins(__name__, ("NAME", "run"))))
