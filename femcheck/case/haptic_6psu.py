@@ -20,12 +20,29 @@ CASE_KIND = "haptic_6psu"
 
 
 @dataclass(frozen=True)
+class LawScale:
+    """Multipliers of each element's compliance *law* (``femcheck coverage`` mutates them; 1 = the law as written).
+
+    Applied where the law is defined (:func:`femcheck.chain.device_parameters`), so the analytical chain and
+    every FE path that reuses the law see the same change, while a meshed part (which does not use the law)
+    does not: that difference is what verification can detect.
+    """
+
+    lg: float = quantity("-", default=1.0, doc="guideway cantilever compliance (via E and G of the law)")
+    act: float = quantity("-", default=1.0, doc="actuation compliance c_act (cable + motor shaft)")
+    sp: float = quantity("-", default=1.0, doc="spherical-joint Hertz compliance (via E* of the law)")
+    prox: float = quantity("-", default=1.0, doc="proximal-link tube compliance (via E and G of the law)")
+    uj: float = quantity("-", default=1.0, doc="universal-joint line contact + pin bending compliance")
+
+
+@dataclass(frozen=True)
 class ModelOptions:
     joint_rotations: Literal["rigid", "released"] = option(
         "rigid", doc="rigid: S/U joints carry moments (paper as published); released: ideal joints")
     beam_shear: bool = option(False, doc="add Timoshenko shear L/(kappa G A) to the lateral beam terms")
     hertz_force: Literal["own_joint_force_at_test_load"] = option(
         "own_joint_force_at_test_load", doc="Hertz linearization force (CONVENTIONS.md §6)")
+    law_scale: LawScale = LawScale()
 
 
 @dataclass(frozen=True)

@@ -77,6 +77,9 @@ def device_parameters(case, overrides: dict[str, np.ndarray] | None = None) -> D
         E, nu = get(f"{p}.E_Pa", m.E_Pa), get(f"{p}.nu", m.nu)
         return E, nu, E / (2.0 * (1.0 + nu))
 
+    # [model.law_scale]: multiply each law's compliance (coverage mutations); beams through 1/E and 1/G (every
+    # cantilever term is 1/E or 1/G), Hertz through E*^(-3/2) (k_sp ~ E*^(2/3)), springs directly
+    law = case.model.law_scale
     gw, pl, sj, uj, act = case.guideway, case.proximal_link, case.spherical_joint, case.universal_joint, case.actuation
     E_lg, _, G_lg = material(gw.material)
     E_pr, _, G_pr = material(pl.material)
@@ -92,22 +95,22 @@ def device_parameters(case, overrides: dict[str, np.ndarray] | None = None) -> D
                                        get("actuation.shaft_length_m", act.shaft_length_m),
                                        get("actuation.capstan_radius_m", act.capstan_radius_m))
     params = DeviceParameters(
-        E_lg=E_lg, G_lg=G_lg,
+        E_lg=E_lg / law.lg, G_lg=G_lg / law.lg,
         lg_section=rectangle_section(get("guideway.width_radial_m", gw.width_radial_m),
                                      get("guideway.depth_tangential_m", gw.depth_tangential_m)),
-        E_prox=E_pr, G_prox=G_pr,
+        E_prox=E_pr / law.prox, G_prox=G_pr / law.prox,
         prox_section=tube_section(get("proximal_link.outer_diameter_m", pl.outer_diameter_m),
                                   get("proximal_link.inner_diameter_m", pl.inner_diameter_m)),
         L2=case.geometry.proximal_link_length_m,
-        c_act=1.0 / k_cable + 1.0 / k_motor,
-        E_star_sp=effective_modulus(Eb, nub, Es, nus),
+        c_act=(1.0 / k_cable + 1.0 / k_motor) * law.act,
+        E_star_sp=effective_modulus(Eb, nub, Es, nus) * law.sp ** -1.5,
         R_star_sp=effective_radius(get("spherical_joint.ball_radius_m", sj.ball_radius_m),
                                    get("spherical_joint.seat_curvature_1_per_m", sj.seat_curvature_1_per_m)),
         F_min_sp=get("spherical_joint.min_contact_force_N", sj.min_contact_force_N),
-        c_uc=1.0 / line_contact_stiffness(get("universal_joint.contact_length_m", uj.contact_length_m),
-                                          effective_modulus(Ep, nup, Eo, nuo)),
-        c_ub=1.0 / pin_bending_stiffness(Ep, get("universal_joint.pin_radius_m", uj.pin_radius_m),
-                                         get("universal_joint.pin_span_m", uj.pin_span_m)),
+        c_uc=law.uj / line_contact_stiffness(get("universal_joint.contact_length_m", uj.contact_length_m),
+                                             effective_modulus(Ep, nup, Eo, nuo)),
+        c_ub=law.uj / pin_bending_stiffness(Ep, get("universal_joint.pin_radius_m", uj.pin_radius_m),
+                                            get("universal_joint.pin_span_m", uj.pin_span_m)),
         beam_shear=case.model.beam_shear,
     )
     unused = sorted(set(overrides) - used)

@@ -1,0 +1,59 @@
+"""``femcheck coverage CASE [--mutation PCT] [--points P0,P5] [--mesh coarse|default|fine] [--json OUT]``:
+how much of the detailed analytical model the FE verification checks (mutation of each element's law)."""
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from femcheck.cli._common import JSON_HELP, emit_json, load_case_for
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("coverage")
+    def coverage_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="case file (TOML)"),
+        mutation: float = typer.Option(50.0, "--mutation", metavar="PCT", help="scale each element's compliance law by 1 + PCT/100"),
+        points: str = typer.Option("P0,P5", "--points", help="comma-separated test points"),
+        mesh: str = typer.Option("coarse", "--mesh", help="FE mesh: coarse | default | fine"),
+        json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
+        jobs: int = typer.Option(1, "--jobs", min=1, help="worker processes for the FE super-elements"),
+    ):
+        """Mutate each element's compliance law where it is defined, rerun the analytical model and the FE,
+        and report which mutations the verify check catches (docs/verify.md, "Coverage")."""
+        from femcheck.cli import console, progress
+        from femcheck.coverage import element_coverage
+        from femcheck.fe_device.mesh_levels import MESH_LEVELS
+        from femcheck.kinematics.psu6 import POINT_LABELS
+
+        if not (mutation == mutation and 0 < mutation <= 1000):
+            raise typer.BadParameter(f"--mutation: {mutation}; expected a percentage in (0, 1000]")
+        if mesh not in MESH_LEVELS:
+            raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
+        pts = tuple(p.strip().upper() for p in points.split(",") if p.strip())
+        bad = [p for p in pts if p not in POINT_LABELS]
+        if bad or not pts:
+            raise typer.BadParameter(f"--points: {bad[0] if bad else points!r}; expected labels P0..P8")
+        if json_out and json_out != "-":
+            from femcheck.report.atomic import check_output_file
+            check_output_file(json_out, "--json")
+        case = load_case_for(case_path, "coverage")
+        con = console()
+        with progress("coverage", 1 + 5, con) as bar:
+            res = element_coverage(case, pts, mutation, mesh, jobs=jobs, progress=lambda d: bar.advance(1, d))
+        if json_out:
+            emit_json(res.as_json(), json_out, inputs=[case_path])
+            if json_out == "-":
+                return
+        from rich.table import Table
+        t = Table(title=f"verification coverage: each law's compliance x {1 + mutation / 100:g} at {', '.join(pts)} "
+                        f"(FE {res.fe_joints} joints vs analytical {res.analytical_joints}, mesh {mesh}, "
+                        f"threshold {res.threshold_pct:g} %)")
+        for h in ("element", "share %", "FE source", "error change (points)", "detected", "min detectable %"):
+            t.add_column(h, justify="left" if h in ("element", "FE source") else "right")
+        for e in res.elements:
+            t.add_row(e.element, f"{e.share_pct:.1f}", e.fe_source, f"{e.error_change_pct:+.2f}", "yes" if e.detected else "no",
+                      "-" if e.min_detectable_pct is None else f"{e.min_detectable_pct:.0f}")
+        con.print(t)
+        con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance can be caught by the FE "
+                  f"(base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s)")

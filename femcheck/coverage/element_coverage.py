@@ -1,0 +1,156 @@
+"""Verification coverage by mutation: does the FE catch a wrong law of each element of the chain?
+
+For every element e of the detailed chain (guideway, actuation, spherical joint, proximal link,
+universal joint) the compliance of its *law* is multiplied by ``1 + PCT/100`` where the law is defined
+(``[model.law_scale]``, applied in :func:`femcheck.chain.device_parameters`). The analytical model sees
+the change. The FE sees it only where it reuses that law (a closed-form spring in the device FE); a meshed
+part does not. The verify check (mean analytical-FE error per direction against
+``ERROR_THRESHOLDS["detailed"]``) is then applied to the mutated pair.
+
+Per element:
+
+- ``share_pct``: the element's mean share of the complementary energy (CONVENTIONS.md §7) at the points;
+- ``fe_source``: from behaviour, not a label: ``shared_closed_form`` when the FE deflection moves with the
+  mutation like the analytical one (ratio of the relative changes >= 0.5: the FE reuses the law), else
+  ``meshed`` (the FE does not move: its element is an independent model), or ``contact_fe`` for a joint
+  element whose FE response comes from a contact FE of the joint (the joint-FE work; not in this tree yet);
+- ``error_change_pct``: change of the worst mean error (percentage points) caused by the mutation;
+- ``detected``: whether the verify check fails on the mutated pair;
+- ``min_detectable_pct``: the smallest mutation the check catches, by linearization of the worst mean error
+  in the mutation (the analytical deflection is linear in each law's compliance up to the Hertz
+  linearization); ``None`` when no mutation is caught: the error does not move, or the law is shared
+  (both sides move alike; the small error change left is the load protocol's, not a check of the law).
+
+``covered_share_pct`` is the summed share of the elements with a finite ``min_detectable_pct``: the
+compliance whose errors the FE can catch at all.
+
+Cost: one FE build (meshes and condensed super-elements) at the points; each mutation re-solves only the
+dense leg/platform algebra of :func:`femcheck.fe_device.device_model.solve_point` with the mutated case,
+reusing the super-elements (they depend on mesh and materials, which no law mutation touches).
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+
+import numpy as np
+
+from femcheck.chain import ELEMENT_NAMES, ELEMENTS
+
+log = logging.getLogger(__name__)
+
+#: the FE's relative change / the analytical relative change above which the FE counts as reusing the law
+SHARED_RATIO = 0.5
+#: min_detectable_pct above this is reported as not detectable (a law off by 100x is not a plausible error)
+MAX_DETECTABLE_PCT = 10_000.0
+
+
+@dataclasses.dataclass(frozen=True)
+class ElementCoverage:
+    element: str
+    share_pct: float
+    fe_source: str
+    error_change_pct: float
+    detected: bool
+    min_detectable_pct: float | None
+    fe_response_ratio: float
+
+    def as_json(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class CoverageResult:
+    mutation_pct: float
+    covered_share_pct: float
+    points: tuple
+    mesh: str
+    fe_joints: str
+    analytical_joints: str
+    threshold_pct: float
+    base_error_pct: float
+    elements: tuple
+    seconds: float
+
+    def as_json(self) -> dict:
+        out = {k: v for k, v in dataclasses.asdict(self).items() if k != "elements"}
+        out["points"] = list(self.points)
+        out["elements"] = [e.as_json() for e in self.elements]
+        return out
+
+    def rows(self) -> list[dict]:
+        """Table rows (percent columns) for reports."""
+        return [{"element": e.element, "share_pct": round(e.share_pct, 2), "fe_source": e.fe_source,
+                 "error_change_pct": round(e.error_change_pct, 3), "detected": e.detected,
+                 "min_detectable_pct": None if e.min_detectable_pct is None else round(e.min_detectable_pct, 1)}
+                for e in self.elements]
+
+
+def _deflections(case, points, directions, fe_models, fe_joints, analytical_joints):
+    """(analytical, FE) deflections along the load, each (n_points, n_directions) m."""
+    from femcheck.fe_device.device_model import solve_point
+    from femcheck.verify.analytical import run_analytical
+
+    av = run_analytical(case, points, directions)
+    a = np.array([[av.deflection(p, d, "detailed", analytical_joints) for d in directions] for p in points])
+    f = np.array([[solve_point(case, fe_models[p], ("detailed",), (fe_joints,), (d,)).cases[("detailed", fe_joints, d)]
+                   .deflection_m for d in directions] for p in points])
+    return a, f, av
+
+
+def _worst_mean_error_pct(a, f) -> float:
+    """The largest over directions of the mean over points of |a - f| / |f| (the verify check's statistic), %."""
+    return float(100 * np.max(np.mean(np.abs(a - f) / np.abs(f), axis=0)))
+
+
+def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh: str = "coarse",
+                     fe_joints: str = "contact", analytical_joints: str = "released", jobs: int = 1,
+                     fe_models=None, progress=None) -> CoverageResult:
+    """Measure the coverage (module docstring). ``fe_models``: {point: PointModel} to reuse (else built)."""
+    from femcheck.verify.check import ERROR_THRESHOLDS
+    from femcheck.verify.fe import run_fe
+
+    if not (np.isfinite(mutation_pct) and mutation_pct > 0):
+        raise ValueError(f"mutation_pct = {mutation_pct}; expected a positive percentage")
+    t0 = time.perf_counter()
+    note = progress or (lambda desc: None)
+    points = tuple(points)
+    directions = tuple(case.loads.directions)
+    if fe_models is None:
+        fe = run_fe(case, points, levels=("detailed",), mesh=mesh, jobs=jobs)
+        fe_models = fe.models
+    note("FE models")
+    threshold = 100 * ERROR_THRESHOLDS["detailed"]
+    a0, f0, av = _deflections(case, points, directions, fe_models, fe_joints, analytical_joints)
+    base = _worst_mean_error_pct(a0, f0)
+    shares = av.mean_contributions(analytical_joints)
+    factor = 1.0 + mutation_pct / 100.0
+    out = []
+    for e in ELEMENTS:
+        variant = case.with_params(**{f"model.law_scale.{e}": factor})
+        a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints)
+        da = float(np.mean(np.abs(a1 / a0 - 1)))
+        df = float(np.mean(np.abs(f1 / f0 - 1)))
+        ratio = df / da if da > 0 else float("nan")
+        source = "shared_closed_form" if ratio >= SHARED_RATIO else "meshed"
+        err = _worst_mean_error_pct(a1, f1)
+        slope = (err - base) / mutation_pct                    # percentage points of error per % of mutation
+        detected = err > threshold
+        # a shared law moves both sides alike: what little the error moves comes from the load protocol
+        # (secant vs tangent Hertz), not from a check of the law, so no mutation of it counts as caught
+        if source != "shared_closed_form" and slope > 1e-9:
+            mdp = (threshold - base) / slope
+            mdp = float(mdp) if mdp <= MAX_DETECTABLE_PCT else None
+        else:
+            mdp = None
+        out.append(ElementCoverage(element=ELEMENT_NAMES[e], share_pct=100 * shares[ELEMENT_NAMES[e]], fe_source=source,
+                                   error_change_pct=err - base, detected=bool(detected), min_detectable_pct=mdp,
+                                   fe_response_ratio=ratio))
+        note(f"mutated {ELEMENT_NAMES[e]}")
+        log.info("coverage %s: share %.1f %%, FE/analytical change %.3f, error %.2f -> %.2f %%", e,
+                 out[-1].share_pct, ratio, base, err)
+    covered = sum(e.share_pct for e in out if e.min_detectable_pct is not None)
+    return CoverageResult(mutation_pct=float(mutation_pct), covered_share_pct=float(covered), points=points, mesh=mesh,
+                          fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
+                          base_error_pct=base, elements=tuple(out), seconds=time.perf_counter() - t0)
