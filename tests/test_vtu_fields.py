@@ -65,7 +65,6 @@ def test_vtu_has_normal_permissions(cantilever, tmp_path):
     assert stat.S_IMODE(os.stat(p).st_mode) == 0o644  # 0666 less umask 022, not mkstemp's 0600
 
 
-@pytest.mark.slow  # six solid guideways are meshed and condensed: ~12-17 s on 2 shared cores
 def test_device_clamp_reactions_balance_the_platform_load(case, tmp_path):
     """Device VTU: the six rail-clamp reactions balance the applied TCP force (simplified level, rigid
     joints, beam link; solid P2 guideways at a coarse mesh), and the per-tet fields are written."""

@@ -44,6 +44,8 @@ def run() -> dict:
             out[f"{level}_iterations_{F}N"] = int(step.iterations)
             out[f"{level}_approach_error_signed_{F}N_pct"] = round(100 * e["delta_error"], 3)
             out[f"{level}_radius_error_signed_{F}N_pct"] = round(100 * e["a_error"], 3)
+            # issue 17: radius from the pressure moments (see hertz_sphere module doc)
+            out[f"{level}_radius_fit_error_signed_{F}N_pct"] = round(100 * e["a_fit_error"], 3)
         out[f"{level}_wall_s"] = round(wall, 3)
     for F in (int(f) for f in hs.LOADS_N):
         for lo, hi in (("coarse", "default"), ("default", "fine")):

@@ -76,11 +76,12 @@ def cvxopt_available() -> bool:
 
 
 def mumps_available() -> bool:
+    """True when python-mumps (the ``mumps`` module with ``Context``; not PyMUMPS's) imports."""
     try:
-        import mumps  # noqa: F401
+        import mumps
     except Exception:
         return False
-    return True
+    return hasattr(mumps, "Context")
 
 
 def set_preferred(name: str | None) -> None:
