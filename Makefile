@@ -35,7 +35,7 @@ test-all: $(STAMP)
 
 ## Throughput and solve-time measurements -> reports/bench/<area>.json
 bench: $(STAMP)
-	$(PY) -m femcheck.bench
+	$(PY) -m femcheck.bench --snapshot
 
 ## Example parameter sweep on the reference case (Sobol' design, detailed model) -> reports/sweep/reference/
 sweep: $(STAMP)
