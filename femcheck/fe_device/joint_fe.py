@@ -1,0 +1,352 @@
+"""Passive joints as meshed contact bodies, condensed onto their contact surfaces (issue 14, part 1).
+
+Each joint is meshed with P2 tetrahedra (``geometry.spherical_joint``: ball in a flat or socket seat;
+``geometry.universal_joint``: cross pins in yoke bores, with the case's clearance and pin position),
+materials per body from the case, GPTS penalty contact with Coulomb friction, augmented Lagrangian and
+modified Newton–Raphson (:func:`femcheck.fe.newton.solve_contact`, seed 004 §3.3).
+
+Reference nodes. Body a is held (spherical: the seat bottom on the slider; universal: the top faces of
+the platform-yoke arms); body b is tied by a rigid coupling (RBE2) to the reference node b
+(spherical: the ball cap to the link, node B at the ball centre; universal: the link-yoke arm bottoms,
+node at their centre). The joint's 6 x 6 compliance is the one of node b relative to the held body a,
+in the joint frame (spherical: z = seat normal; universal: frame B_i, z = link axis, x = a1, y = a2).
+
+Static condensation (why it converges). The monolithic solve carries every interior DOF through every
+contact iteration. Here the constrained stiffness K_q = Tᵀ K T is split into the DOFs the contact
+operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once (sparse
+direct, :func:`femcheck.fe.linear_solver.factorize`) and the Schur complement
+
+    S = K_rr − K_ri K_ii⁻¹ K_ir                               (exact for the linear bodies)
+
+is formed with one multi-right-hand-side back-substitution. The contact iterations (status changes,
+Uzawa updates, refactorizations) then run on the small dense S only. The initial active set is the one
+the Hertz patch predicts: every contact point whose initial gap is within ``closure`` (the clearance
+plus the Hertz approach at the largest load) starts closed; the load is stepped (the eq. 1 levels).
+
+Compliances (SI: m/N, rad/(N m), m/(N m)):
+* secant along the joint axis for the eq. 1 increment: (u(F_20) − u(F_5)) / (F_20 − F_5);
+* tangent 6 x 6 at the test state: the condensed iteration matrix with the converged contact status
+  (closed points: ε_n, sticking points: ε_t), reduced to node b; components the contact cannot carry
+  (a frictionless or fully sliding rotation) come out as ``inf``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from femcheck.errors import FemcheckError
+
+log = logging.getLogger(__name__)
+
+JOINTS = ("spherical", "universal")
+MESH_FACTORS = {"coarse": 2.0, "default": 1.0, "fine": 0.5}
+COMPONENTS = ("u_x", "u_y", "u_z", "theta_x", "theta_y", "theta_z")
+
+
+class JointGeometryError(FemcheckError):
+    """Initial interpenetration beyond the clearance, or a clearance the mesh cannot resolve."""
+
+
+@dataclasses.dataclass(frozen=True)
+class CondensedJoint:
+    """Joint FE condensed onto its contact DOFs and reference node.
+
+    ``S`` (n_r, n_r) dense N/m Schur complement; ``pairs`` contact pairs with operators on the n_r
+    retained DOFs; ``ref`` (6,) indices of node b in the retained set; ``dofs`` mesh DOFs (P2, 3 per
+    node); ``free_dofs`` after constraints; ``retained`` n_r; ``condense_s`` wall time; ``gap0_min``,
+    ``clearance_m``, ``contact_h_m`` (m) for the geometry checks; ``factorizations`` of K_ii (1).
+    """
+
+    joint: str
+    S: np.ndarray
+    pairs: tuple
+    ref: np.ndarray
+    dofs: int
+    free_dofs: int
+    retained: int
+    condense_s: float
+    clearance_m: float
+    contact_h_m: float
+    factorizations: int
+
+
+def _materials(pm, mats: dict):
+    names = [b.name for b in pm.bodies]
+    key = [next(k for k in mats if k in names[b]) for b in pm.body_of_tet]
+    E = np.array([mats[k].E_Pa for k in key])
+    nu = np.array([mats[k].nu for k in key])
+    return E, nu
+
+
+def _mesh_size(case, joint: str, mesh: str) -> float:
+    if mesh not in MESH_FACTORS:
+        raise FemcheckError(f"--mesh {mesh!r}: expected one of {', '.join(MESH_FACTORS)}")
+    m = case.solid.mesh
+    base = m.spherical_joint_size_m if joint == "spherical" else m.universal_joint_size_m
+    return MESH_FACTORS[mesh] * base
+
+
+def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float = 100.0,
+                friction: float | None = None) -> CondensedJoint:
+    """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ."""
+    from femcheck.fe import constraints as cs
+    from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
+    from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
+
+    if joint not in JOINTS:
+        raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)} or all")
+    size = _mesh_size(case, joint, mesh)
+    t0 = time.perf_counter()
+    if joint == "spherical":
+        from geometry import spherical_joint
+        sj = case.spherical_joint
+        pm = spherical_joint.build(case, size)
+        mats = {"ball": sj.ball_material, "seat": sj.seat_material}
+        mu = case.solid.spherical_joint.friction if friction is None else friction
+        held, coupled, pairs_spec = "sj_seat_mount", "sj_ball_link", [("sj_seat_contact", "sj_ball_contact", sj.seat_material)]
+        clearance = 0.0
+    else:
+        from geometry import universal_joint
+        uj = case.universal_joint
+        pm = universal_joint.build(case, size)
+        mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
+        mu = case.solid.universal_joint.friction if friction is None else friction
+        held, coupled = "uj_platform_mount", "uj_link_mount"
+        pairs_spec = [(f"uj_a{k}_bore_contact", f"uj_a{k}_pin_contact", uj.bore_material) for k in (1, 2)]
+        clearance = float(case.solid.universal_joint.pin_clearance_m)
+    msh = pm.to_skfem()
+    basis = vector_basis(msh, 2)
+    E, nu = _materials(pm, mats)
+    K = assemble_stiffness(basis, E, nu)
+    nref = 2 if joint == "universal" else 1
+    ndof, refs = cs.append_reference_nodes(basis.N, nref)
+    ref_b = np.asarray(refs[0])
+    ref_point_b = np.asarray(pm.regions[coupled].reference_point, float) if hasattr(pm, "regions") else np.zeros(3)
+    pts, trip = dof_triplets(basis, basis.get_dofs(coupled).all())
+    parts = [cs.clamp(ndof, basis.get_dofs(held).all()), cs.rigid_coupling(ndof, ref_b, ref_point_b, pts, trip)]
+    if joint == "universal":
+        hp, ht = dof_triplets(basis, basis.get_dofs("uj_hub").all())
+        hub_point = np.asarray(pm.regions["uj_hub"].reference_point, float)
+        parts.append(cs.rigid_coupling(ndof, np.asarray(refs[1]), hub_point, hp, ht))
+    C = cs.combine(*parts)
+    pairs, h_c = [], np.inf
+    for slave, master, mat in pairs_spec:
+        sf, mf = msh.boundaries[slave], msh.boundaries[master]
+        eps = default_penalty(msh, sf, mat.E_Pa, penalty_factor)
+        pr = pair_surfaces(basis, sf, mf, penalty_n=eps, friction=mu, name=slave, ndof=ndof)
+        pairs.append(pr)
+        h_c = min(h_c, float(np.min(mat.E_Pa * penalty_factor / eps)))
+    _check_gaps(joint, pairs, clearance, h_c)
+    S, red_pairs, ref_r, nfree, nret, nfac = _condense(K, C, pairs, ref_b)
+    return CondensedJoint(joint, S, tuple(red_pairs), ref_r, int(basis.N), nfree, nret, time.perf_counter() - t0,
+                          clearance, h_c, nfac)
+
+
+def _check_gaps(joint: str, pairs, clearance: float, h_c: float) -> None:
+    """Named errors for initial interpenetration beyond the clearance and an unresolved clearance."""
+    g0 = np.concatenate([p.g0 for p in pairs])
+    tol = 1e-3 * h_c  # facet chords of P2-straight facets: penetration below 0.1 % of the contact edge is geometry noise
+    if g0.min() < -max(clearance, 0.0) - tol:
+        raise JointGeometryError(f"{joint} joint: initial interpenetration {-g0.min():.3g} m exceeds the clearance "
+                                 f"{clearance:.3g} m (check the case's [solid.{joint}_joint] dimensions)")
+    # chord sagitta of a contact edge h_c on the curved surface must be below the clearance it has to resolve
+    if clearance > 0 and joint == "universal":
+        r = pairs[0].projection_distance.max() if pairs[0].projection_distance.size else 0.0
+        sag = float(np.max(np.abs(np.concatenate([p.projection_distance for p in pairs])) - np.abs(
+            np.concatenate([p.g0 for p in pairs]))))
+        if sag > clearance:
+            raise JointGeometryError(f"universal joint: pin clearance {clearance:.3g} m is below what the contact mesh "
+                                     f"resolves (facet-chord error {sag:.3g} m); refine --mesh or raise pin_clearance_m")
+        del r
+
+
+def _condense(K, C, pairs, ref_b):
+    """Schur complement of Tᵀ K T onto the contact-touched DOFs and node b (module doc)."""
+    from femcheck.fe.constraints import pad
+    from femcheck.fe.linear_solver import factorize
+
+    T = C.T
+    K = pad(sp.csr_matrix(K), C.ndof)
+    Kq = sp.csr_matrix(T.T @ (K @ T))
+    Bn = [sp.csr_matrix(p.B_n @ T) for p in pairs]
+    Bt = [sp.csr_matrix(p.B_t @ T) for p in pairs]
+    # node b's reduced DOFs: the columns of T that move node b
+    Tb = sp.csr_matrix(T[ref_b])
+    ref_q = np.unique(Tb.indices)
+    if ref_q.size != 6:
+        raise FemcheckError(f"reference node maps to {ref_q.size} reduced DOFs, expected 6")
+    ref_q = ref_q[np.argsort(np.argmax(np.abs(Tb[:, ref_q].toarray()), axis=0))]
+    touched = np.unique(np.concatenate([b.indices for b in Bn + Bt] + [ref_q]))
+    n = Kq.shape[0]
+    mask = np.zeros(n, bool)
+    mask[touched] = True
+    r, i = np.flatnonzero(mask), np.flatnonzero(~mask)
+    Kii = Kq[i][:, i]
+    Kir = Kq[i][:, r].toarray()
+    fac = factorize(sp.csc_matrix(Kii), "auto")
+    X = fac.solve(Kir)
+    S = Kq[r][:, r].toarray() - Kir.T @ X
+    S = 0.5 * (S + S.T)
+    pos = np.full(n, -1)
+    pos[r] = np.arange(r.size)
+    red = [dataclasses.replace(p, B_n=sp.csr_matrix(bn[:, r]), B_t=sp.csr_matrix(bt[:, r]))
+           for p, bn, bt in zip(pairs, Bn, Bt)]
+    return S, red, pos[ref_q], int(n), int(r.size), 1
+
+
+@dataclasses.dataclass(frozen=True)
+class JointResponse:
+    """Contact-FE response of one joint at one load state (SI, joint frame; module doc).
+
+    ``loads_N`` the force levels along the joint axis (eq. 1: preload, test); ``axial_m`` (n,) node-b
+    displacement along the load; ``secant_axial_m_per_N``; ``tangent`` (6, 6) stick compliance at the test
+    load; ``closed_points`` contact points closed at the test load; ``iterations``, ``factorizations``,
+    ``augmentations`` of the contact solve; ``residual_history``; ``dofs``, ``free_dofs``, ``retained``;
+    ``seconds`` (total), ``condense_s``.
+    """
+
+    joint: str
+    loads_N: tuple
+    axial_m: np.ndarray
+    secant_axial_m_per_N: float
+    tangent: np.ndarray
+    closed_points: int
+    iterations: int
+    factorizations: int
+    augmentations: int
+    dofs: int
+    free_dofs: int
+    retained: int
+    seconds: float
+    condense_s: float
+
+    @property
+    def fe_compliance(self) -> np.ndarray:
+        """6 x 6: the tangent with its axial entry replaced by the eq. 1 secant (the compared state)."""
+        C = self.tangent.copy()
+        C[2, 2] = self.secant_axial_m_per_N
+        return C
+
+
+def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
+                penetration_tol: float) -> JointResponse:
+    """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
+
+    ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
+    approach at the smallest load, e.g. 1e-3 of the analytical one)."""
+    from femcheck.fe.contact import status as st
+    from femcheck.fe.newton import ContactProblem, solve_contact
+
+    t0 = time.perf_counter()
+    loads = tuple(float(F) for F in loads_N)
+    Fmax = max(loads)
+    n = model.S.shape[0]
+    # the eq. 1 load path: node b moves along the joint axis only (the leg holds its other components),
+    # frictionless normal contact (under a pure axial load friction does no work on a symmetric patch)
+    held = np.delete(model.ref, 2)
+    keep = np.setdiff1d(np.arange(n), held)
+    ax = int(np.searchsorted(keep, model.ref[2]))
+    f = np.zeros(keep.size)
+    f[ax] = axis_sign * Fmax
+    pairs = tuple(dataclasses.replace(p, B_n=sp.csr_matrix(p.B_n[:, keep]), B_t=sp.csr_matrix(p.B_t[:, keep]),
+                                      friction=0.0) for p in model.pairs)
+    problem = ContactProblem(K=sp.csr_matrix(model.S[np.ix_(keep, keep)]), f=f, pairs=pairs)
+    # Hertz-predicted active set: every point within the clearance (plus a tiny margin) starts closed
+    closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m
+    res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=closure,
+                        penetration_tol=penetration_tol, max_iter=150)
+    u = np.array([axis_sign * s.u[ax] for s in res.steps])
+    sec = float((u[-1] - u[0]) / (loads[-1] - loads[0]))
+    closed = [ps.status != st.OPEN for ps in res.steps[-1].pairs]
+    tangent = _tangent(model, closed)
+    return JointResponse(model.joint, loads, u, sec, tangent, int(sum(int(c.sum()) for c in closed)),
+                         int(sum(res.iterations_per_step)),
+                         int(res.timings.get("factorizations", 0)), int(sum(s.augmentations for s in res.steps)),
+                         model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
+                         model.condense_s)
+
+
+def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
+    """6 x 6 stick compliance of node b: the condensed matrix plus ε_n on the closed points and ε_t on the
+    same points held stuck (the Mindlin stick state the analytical laws describe)."""
+    A = model.S.copy()
+    for p, closed in zip(model.pairs, closed_sets):
+        if closed.any():
+            Bn = p.B_n[closed]
+            A += (Bn.T @ sp.diags(p.penalty_n[closed] * p.weights[closed]) @ Bn).toarray()
+        stick = closed
+        if stick.any():
+            rows = np.flatnonzero(np.repeat(stick, 2))
+            Bt = p.B_t[rows]
+            w = np.repeat(p.penalty_t[stick] * p.weights[stick], 2)
+            A += (Bt.T @ sp.diags(w) @ Bt).toarray()
+    ref = model.ref
+    o = np.setdiff1d(np.arange(A.shape[0]), ref)
+    Aoo = A[np.ix_(o, o)]
+    Aor = A[np.ix_(o, ref)]
+    try:
+        X = np.linalg.solve(Aoo, Aor)
+    except np.linalg.LinAlgError:
+        X = np.linalg.lstsq(Aoo, Aor, rcond=None)[0]
+    Kb = A[np.ix_(ref, ref)] - Aor.T @ X
+    Kb = 0.5 * (Kb + Kb.T)
+    w, V = np.linalg.eigh(Kb)
+    tol = 1e-9 * max(float(w.max()), 1e-300)
+    Cb = np.zeros((6, 6))
+    for k in range(6):
+        if w[k] > tol:
+            Cb += np.outer(V[:, k], V[:, k]) / w[k]
+    for k in range(6):  # a mechanism of the contact (no stiffness): infinite compliance where it moves
+        if w[k] <= tol:
+            big = np.abs(V[:, k]) > 1e-3
+            Cb[np.ix_(big, big)] = np.inf
+    return Cb
+
+
+def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
+    """6 x 6 compliance of the closed-form joint laws (seed 000 §4.4.1) in the joint frame, SI.
+
+    spherical: axial = Hertz eq. 1 secant (δ_H(F20) − δ_H(F5)) / (F20 − F5) (Johnson eq. 4.23),
+    lateral = Mindlin stick 1/(8 G* a) (Johnson eq. 7.32), tilt = 1/(8 G* a R_b²), spin = 3/(16 G* a³);
+    universal (frame B): lateral x, y = c_UC (Hertz line contact), axial z = c_UC + c_UB (line contact
+    plus pin bending, seed 000 eqs. 36–41), rotations about a1, a2 = 1/(k_line r_pin²) (stick),
+    spin about z = 0 (tied in the analytical model).
+    """
+    from femcheck.chain import device_parameters
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.loads import hertz_approach
+
+    fr = joint_friction(case)
+    F0, F1 = float(min(loads_N)), float(max(loads_N))
+    C = np.zeros((6, 6))
+    if joint == "spherical":
+        d = hertz_approach(np.array([F0, F1]), fr.E_star_Pa, fr.R_star_m)
+        a = float(fr.contact_radius(F1))
+        kt, ks, _ = fr.stick_stiffness(np.array([F1]))
+        C[2, 2] = (d[1] - d[0]) / (F1 - F0)
+        C[0, 0] = C[1, 1] = 1.0 / (8.0 * fr.G_star_Pa * a)
+        C[3, 3] = C[4, 4] = 1.0 / float(kt[0])
+        C[5, 5] = 1.0 / float(ks[0])
+    else:
+        p = device_parameters(case)
+        c_uc, c_ub = float(np.squeeze(p.c_uc)), float(np.squeeze(p.c_ub))
+        _, _, kp = fr.stick_stiffness(np.array([F1]))
+        C[0, 0] = C[1, 1] = c_uc
+        C[2, 2] = c_uc + c_ub
+        C[3, 3] = C[4, 4] = 1.0 / float(kp[0])
+    return C
+
+
+def error_pct(fe: np.ndarray, analytical: np.ndarray) -> dict:
+    """Per diagonal component: 100 (FE − analytical) / analytical; None where the analytical law is 0 or
+    either value is infinite (a released or tied component)."""
+    out = {}
+    for k, name in enumerate(COMPONENTS):
+        a, f = float(analytical[k, k]), float(fe[k, k])
+        out[name] = None if (a == 0 or not math.isfinite(a) or not math.isfinite(f)) else 100.0 * (f - a) / a
+    return out
