@@ -85,7 +85,8 @@ def test_joint_table_rows_flag_and_csv():
     """Rows per (joint, component); laws off by > 10 % are flagged with a named better law; CSV round trip."""
     fe = np.diag([1.0, 1.0, 1.2, 1.0, 1.0, np.inf])
     an = np.diag([1.0, 1.0, 1.0, 1.05, 1.0, 1.0])
-    res = {"joint": "universal", "fe_compliance": jc._json_matrix(fe), "analytical_compliance": jc._json_matrix(an)}
+    res = {"joint": "universal", "fe_component_compliance": jc._json_matrix(np.diag(fe)[None])[0],
+           "analytical_compliance": jc._json_matrix(an)}
     rows = {r["component"]: r for r in jc.joint_table_rows([res])}
     assert rows["axial"]["error_pct"] == pytest.approx(20.0)
     assert rows["axial"]["off_by_more_than_10pct"] and "conformal" in rows["axial"]["better_law"]

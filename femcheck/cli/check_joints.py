@@ -67,7 +67,7 @@ def register(app: typer.Typer) -> None:
             t.add_column(col, justify="left" if col in ("joint", "component") else "right")
         for r in results:
             for k, comp in enumerate(COMPONENTS):
-                fe, an, e = r["fe_compliance"][k][k], r["analytical_compliance"][k][k], r["error_pct"][comp]
+                fe, an, e = r["fe_component_compliance"][k], r["analytical_compliance"][k][k], r["error_pct"][comp]
                 t.add_row(r["joint"], comp, "inf" if fe is None else f"{fe:.4g}", f"{an:.4g}",
                           "-" if e is None else f"{e:+.1f}", str(r["dofs"]), str(r["iterations"]), f"{r['seconds']:.1f}")
         console().print(t)

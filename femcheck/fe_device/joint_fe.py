@@ -272,6 +272,7 @@ class JointResponse:
     axial_m: np.ndarray
     secant_axial_m_per_N: float
     tangent: np.ndarray
+    tangent_stiffness: np.ndarray
     closed_points: int
     iterations: int
     factorizations: int
@@ -288,6 +289,16 @@ class JointResponse:
         C = self.tangent.copy()
         C[2, 2] = self.secant_axial_m_per_N
         return C
+
+    @property
+    def component_compliance(self) -> np.ndarray:
+        """(6,) compliance of each component with the other five held, 1 / K_kk of the tangent stiffness,
+        axial = the eq. 1 secant: what a per-component joint spring of the analytical model describes
+        (a free ball rolls about its contact point under a lateral force at B; the link prevents that)."""
+        with np.errstate(divide="ignore"):
+            c = np.where(np.diag(self.tangent_stiffness) > 0, 1.0 / np.diag(self.tangent_stiffness), np.inf)
+        c[2] = self.secant_axial_m_per_N
+        return c
 
 
 def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
@@ -331,8 +342,8 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
         if pen > 10.0 * penetration_tol and False:
             raise ConvergenceError(f"{model.joint} joint: a contact point outside the Hertz-predicted candidate band "
                                    f"penetrates by {pen:.3g} m; widen CANDIDATE_ANGLE_RAD", [], {"penetration_m": pen})
-    tangent = _tangent(model, closed)
-    return JointResponse(model.joint, loads, u, sec, tangent, int(sum(int(c.sum()) for c in closed)),
+    tangent, stiffness = _tangent(model, closed)
+    return JointResponse(model.joint, loads, u, sec, tangent, stiffness, int(sum(int(c.sum()) for c in closed)),
                          int(sum(res.iterations_per_step)),
                          int(res.timings.get("factorizations", 0)), int(sum(s.augmentations for s in res.steps)),
                          model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
@@ -373,7 +384,7 @@ def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
         if w[k] <= tol:
             big = np.abs(V[:, k]) > 1e-3
             Cb[np.ix_(big, big)] = np.inf
-    return Cb
+    return Cb, Kb
 
 
 def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
@@ -410,11 +421,13 @@ def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
     return C
 
 
-def error_pct(fe: np.ndarray, analytical: np.ndarray) -> dict:
-    """Per diagonal component: 100 (FE − analytical) / analytical; None where the analytical law is 0 or
-    either value is infinite (a released or tied component)."""
+def error_pct(fe, analytical: np.ndarray) -> dict:
+    """Per component: 100 (FE − analytical) / analytical; None where the analytical law is 0 or either
+    value is infinite (a released or tied component). ``fe``: (6,) component compliances or a 6 x 6."""
+    fe = np.asarray(fe, float)
+    fe = np.diag(fe) if fe.ndim == 2 else fe
     out = {}
     for k, name in enumerate(COMPONENTS):
-        a, f = float(analytical[k, k]), float(fe[k, k])
+        a, f = float(analytical[k, k]), float(fe[k])
         out[name] = None if (a == 0 or not math.isfinite(a) or not math.isfinite(f)) else 100.0 * (f - a) / a
     return out
