@@ -122,3 +122,20 @@ def test_spherical_joint_contact_fe_coarse(case, tmp_path):
     assert np.shape(r["fe_compliance"]) == (6, 6) and np.shape(r["analytical_compliance"]) == (6, 6)
     assert abs(r["error_pct"]["u_z"]) < 25.0
     assert r["retained_dofs"] < r["free_dofs"] / 10  # the condensation is what makes it fast
+
+
+def test_joint_law_adjustments_scale_the_joint_elements(case):
+    """The FE-measured axial law enters the extended model as the sp/uj element factor FE / closed form,
+    and changes the TCP compliance in the direction of the factor (softer joint -> softer device)."""
+    from femcheck.chain.haptic_6psu_model import ELEMENTS, evaluate
+    from femcheck.kinematics.psu6 import test_points
+    an = jf.analytical_compliance(case, "spherical")
+    res = {"joint": "spherical", "fe_component_compliance": [None, None, 1.5 * an[2, 2], None, None, None],
+           "analytical_compliance": jc._json_matrix(an)}
+    adj = jc.joint_law_adjustments([res])
+    assert adj.element_scale[:, ELEMENTS.index("sp")] == pytest.approx(1.5)  # exactly the ratio given
+    assert np.all(adj.element_scale[:, ELEMENTS.index("uj")] == 1.0)
+    poses = test_points(case)[:1]
+    base = evaluate(case, poses, model="detailed", backend="numpy")
+    soft = evaluate(case, poses, model="detailed", adjust=adj, backend="numpy")
+    assert np.trace(soft.S[0][:3, :3]) > np.trace(base.S[0][:3, :3])

@@ -129,3 +129,24 @@ def write_joint_table_csv(rows: list[dict]) -> str:
     for r in rows:
         w.writerow({k: ("" if r[k] is None else r[k]) for k in keys})
     return buf.getvalue()
+
+
+def joint_law_adjustments(results: list[dict]):
+    """The FE-measured joint laws as an option of the extended analytical model (issue 14 part 3).
+
+    A leg with ideal passive joints is a two-force member, so its joints work along their axes: the
+    axial compliance is the joint law that enters the leg. This returns
+    :class:`femcheck.chain.haptic_6psu_model.ChainAdjustments` whose ``element_scale`` multiplies the
+    ``sp`` and ``uj`` element compliances of every chain by FE / closed form of the axial component
+    (``check_joint`` results, one per joint type; a joint not given keeps its closed form, factor 1).
+    ``femcheck diagnose`` and the sweeps take such adjustments (``evaluate(..., adjust=...)``).
+    """
+    from femcheck.chain.haptic_6psu_model import ELEMENTS, ChainAdjustments
+
+    scale = np.ones((6, len(ELEMENTS)))
+    for res in results:
+        fe, an = res["fe_component_compliance"][2], res["analytical_compliance"][2][2]
+        if fe is None or not an:
+            raise FemcheckError(f"{res['joint']} joint: no finite axial compliance to build the joint law from")
+        scale[:, ELEMENTS.index("sp" if res["joint"] == "spherical" else "uj")] = fe / an
+    return ChainAdjustments(element_scale=scale)
