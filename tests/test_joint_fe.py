@@ -139,3 +139,11 @@ def test_joint_law_adjustments_scale_the_joint_elements(case):
     base = evaluate(case, poses, model="detailed", backend="numpy")
     soft = evaluate(case, poses, model="detailed", adjust=adj, backend="numpy")
     assert np.trace(soft.S[0][:3, :3]) > np.trace(base.S[0][:3, :3])
+
+
+def test_joint_table_html_names_flagged_laws():
+    an = np.diag([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    res = {"joint": "spherical", "fe_component_compliance": [1.0, 1.0, 1.3, 1.0, 1.0, 1.0],
+           "analytical_compliance": jc._json_matrix(an)}
+    text = jc.joint_table_html(jc.joint_table_rows([res]))
+    assert "seat-bulk" in text and text.count("within 10 %") == 3  # axial flagged, three others within

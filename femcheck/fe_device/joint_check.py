@@ -150,3 +150,22 @@ def joint_law_adjustments(results: list[dict]):
             raise FemcheckError(f"{res['joint']} joint: no finite axial compliance to build the joint law from")
         scale[:, ELEMENTS.index("sp" if res["joint"] == "spherical" else "uj")] = fe / an
     return ChainAdjustments(element_scale=scale)
+
+
+def joint_table_html(rows: list[dict]) -> str:
+    """The joint table as an HTML section for ``reports/verify/report.html`` (the integrator adds it
+    through the verify report's section API): compliances in SI, error %, the flagged laws named."""
+    import html
+
+    def num(v, fmt):
+        return "∞" if v is None else format(v, fmt)
+
+    body = "".join(
+        f"<tr><td>{html.escape(r['joint'])}</td><td>{r['component']}</td><td>{num(r['fe_compliance'], '.4g')}</td>"
+        f"<td>{num(r['analytical_compliance'], '.4g')}</td><td>{'–' if r['error_pct'] is None else format(r['error_pct'], '+.1f')}</td>"
+        f"<td>{'off by > 10 %: ' + html.escape(r['better_law']) if r['off_by_more_than_10pct'] else 'within 10 %'}</td></tr>"
+        for r in rows)
+    return ("<section id='joint-table'><h2>Joint table: contact FE vs the analytical joint laws</h2>"
+            "<table><thead><tr><th>joint</th><th>component</th><th>FE compliance (SI)</th>"
+            "<th>analytical (SI)</th><th>error %</th><th>verdict</th></tr></thead><tbody>"
+            f"{body}</tbody></table></section>")
