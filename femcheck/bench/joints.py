@@ -1,0 +1,57 @@
+"""Bench ``joints``: contact FE of the passive joints (issue 14), coarse / default / fine.
+
+Per joint and mesh level: DOFs (P2 mesh), free DOFs after constraints, retained DOFs after condensation
+(contact candidates + reference node), candidate / total contact points, condensation time (mesh,
+assembly, pairing, one sparse factorization of the interior, blockwise Schur complement), contact
+iterations, factorizations (interior + the contact loop's), Uzawa updates, total wall time, the eq. 1
+axial secant and each component compliance (m/N, rad/(N m)), its error against the closed-form law (%),
+and the spread of each component over the three levels (%, target ≤ 3).
+Targets (issue 14): universal ≤ 120 s and spherical ≤ 60 s at the default mesh on the 2-core machine.
+A level that fails records ``<joint>_<level>_error`` (the exception text) instead of numbers.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+AREA = "joints"
+LEVELS = ("coarse", "default", "fine")
+
+
+def run(joints=("spherical", "universal"), levels=LEVELS) -> dict:
+    from femcheck.case import load_case
+    from femcheck.fe_device.joint_check import check_joint
+    from femcheck.fe_device.joint_fe import COMPONENTS
+
+    case = load_case("cases/haptic_6psu.toml")
+    out: dict = {"point": "P0"}
+    for joint in joints:
+        comps = {}
+        for level in levels:
+            key = f"{joint}_{level}"
+            try:
+                r = check_joint(case, joint, level, "P0")
+            except Exception as exc:  # a bench records failures, it does not stop at the first
+                out[f"{key}_error"] = str(exc)[:300]
+                continue
+            out[f"{key}_dofs"] = r["dofs"]
+            out[f"{key}_free_dofs"] = r["free_dofs"]
+            out[f"{key}_retained_dofs"] = r["retained_dofs"]
+            out[f"{key}_condense_s"] = round(r["condense_s"], 3)
+            out[f"{key}_iterations"] = r["iterations"]
+            out[f"{key}_factorizations"] = r["factorizations"]
+            out[f"{key}_augmentations"] = r["augmentations"]
+            out[f"{key}_wall_s"] = round(r["seconds"], 3)
+            out[f"{key}_load_preload_N"] = round(r["loads_N"][0], 4)
+            out[f"{key}_load_test_N"] = round(r["loads_N"][1], 4)
+            for k, name in enumerate(COMPONENTS):
+                v = r["fe_component_compliance"][k]
+                out[f"{key}_{name}_compliance_SI"] = v
+                e = r["error_pct"][name]
+                out[f"{key}_{name}_error_pct"] = None if e is None else round(e, 3)
+                if v is not None:
+                    comps.setdefault(name, []).append(v)
+        for name, vals in comps.items():
+            if len(vals) == len(levels):
+                v = np.asarray(vals, float)
+                out[f"{joint}_{name}_mesh_spread_pct"] = round(float(100 * (v.max() - v.min()) / abs(v[-1])), 3)
+    return out

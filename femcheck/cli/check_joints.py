@@ -1,0 +1,73 @@
+"""``femcheck check-joints CASE [--joint spherical|universal|all] [--mesh coarse|default|fine] [--point P0]
+[--json OUT] [--csv OUT]``: contact FE of the passive joints vs their closed-form laws (issue 14).
+
+Each joint is meshed and solved with penalty contact, augmented Lagrangian and modified Newton–Raphson,
+condensed onto its contact DOFs (:mod:`femcheck.fe_device.joint_fe`), under the eq. 1 force levels of
+the most loaded joint at the test point (:mod:`femcheck.fe_device.joint_check`). JSON (``-`` = stdout):
+a list with one object per joint, keys ``converged``, ``dofs``, ``iterations``, ``seconds``,
+``fe_compliance``, ``analytical_compliance`` (6 x 6, SI) and ``error_pct`` (per component), and more.
+``--csv`` writes the joint table. Exit 0 when every joint converged; a joint that does not converge
+raises ConvergenceError (residual history, chattering points) and exits 1.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("check-joints")
+    def check_joints(
+        case_path: Path = typer.Argument(..., help="case TOML"),
+        joint: str = typer.Option("all", "--joint", help="spherical | universal | all"),
+        mesh: str = typer.Option("default", "--mesh", help="coarse | default | fine"),
+        point: str = typer.Option("P0", "--point", help="test point P0..P8 whose load the joints carry"),
+        json_out: Optional[str] = typer.Option(None, "--json", help="write JSON to this path ('-' = stdout)"),
+        csv_out: Optional[Path] = typer.Option(None, "--csv", help="write the joint table CSV to this path"),
+    ) -> None:
+        """Contact FE of each passive joint under the device load vs the closed-form joint laws."""
+        from femcheck.case import load_case
+        from femcheck.errors import ConvergenceError, FemcheckError
+        from femcheck.fe_device.joint_check import check_joint, joint_table_rows, write_joint_table_csv
+        from femcheck.fe_device.joint_fe import COMPONENTS, JOINTS
+        from femcheck.report.atomic import write_text_atomic
+
+        if joint not in JOINTS + ("all",):
+            raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)}, all")
+        from femcheck.report.atomic import refuse_input_overwrite
+        for out in (json_out if json_out not in (None, "-") else None, csv_out):
+            if out:
+                refuse_input_overwrite(out, [case_path])
+        case = load_case(case_path)
+        names = JOINTS if joint == "all" else (joint,)
+        results = []
+        try:
+            for name in names:
+                results.append(check_joint(case, name, mesh, point))
+        except ConvergenceError as exc:
+            typer.secho(f"check failed: {exc}", err=True, fg="red")
+            raise typer.Exit(1)
+        text = json.dumps(results, indent=2)
+        if json_out == "-":
+            typer.echo(text)
+        elif json_out:
+            write_text_atomic(json_out, text + "\n")
+        if csv_out:
+            write_text_atomic(csv_out, write_joint_table_csv(joint_table_rows(results)))
+        if json_out == "-":
+            return
+        from rich.table import Table
+
+        from femcheck.cli import console
+        t = Table(title=f"femcheck check-joints {case_path} (mesh {mesh}, point {point.upper()})")
+        for col in ("joint", "component", "FE", "analytical", "error %", "DOFs", "iterations", "wall s"):
+            t.add_column(col, justify="left" if col in ("joint", "component") else "right")
+        for r in results:
+            for k, comp in enumerate(COMPONENTS):
+                fe, an, e = r["fe_component_compliance"][k], r["analytical_compliance"][k][k], r["error_pct"][comp]
+                t.add_row(r["joint"], comp, "inf" if fe is None else f"{fe:.4g}", f"{an:.4g}",
+                          "-" if e is None else f"{e:+.1f}", str(r["dofs"]), str(r["iterations"]), f"{r['seconds']:.1f}")
+        console().print(t)

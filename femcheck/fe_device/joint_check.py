@@ -1,0 +1,171 @@
+"""``check-joints``: each joint's contact FE under the load the device puts on it, vs its closed-form law.
+
+Load state (seed 000 eq. 1, CONVENTIONS.md §8). With ideal passive joints every leg is a two-force
+member, so the TCP wrench W is carried by the leg forces f (6,) along the link axes u_i:
+
+    J f = W,   J = [u_i ; (C_i − tcp) × u_i]  (6 x 6, column i per leg)
+
+for the preload P_p (5 N) and P_p + P_T (20 N) along each of the case's test directions. The most
+loaded joint (largest |f_i| over legs and directions at the test point) sets the joint's two force
+levels F_5 = |f_i(P_p)|, F_20 = |f_i(P_p + P_T)|, which the contact FE applies along the joint axis
+(:func:`femcheck.fe_device.joint_fe.solve_joint`).
+
+The joint table (issue 14 part 3) compares, per joint and component (axial, lateral, tilt, spin), the
+FE compliance with the analytical law (:func:`femcheck.fe_device.joint_fe.analytical_compliance`).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import logging
+import math
+
+import numpy as np
+
+from femcheck.errors import FemcheckError
+
+log = logging.getLogger(__name__)
+
+#: table components: (name, index into the 6 x 6 diagonal)
+TABLE_COMPONENTS = (("axial", 2), ("lateral", 0), ("tilt", 3), ("spin", 5))
+#: a law is flagged when it is off by more than this (issue 14 part 3)
+FLAG_PCT = 10.0
+
+
+def leg_forces(case, point: str = "P0") -> np.ndarray:
+    """(n_dir, 2, 6) leg forces (N, + = tension along u_i) at the eq. 1 levels (preload, preload + test)
+    for each of the case's test directions, from the released-joint statics J f = W (module doc)."""
+    from femcheck.fe_device.loads import direction_unit
+    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
+
+    label = point.upper()
+    if label not in POINT_LABELS:
+        raise FemcheckError(f"--point {point!r}: expected one of {', '.join(POINT_LABELS)}")
+    legs = leg_geometry(case, test_points(case)[[POINT_LABELS.index(label)]], labels=[label])
+    u, C, tcp = legs.u[0], legs.C[0], legs.tcp[0]
+    J = np.vstack([u.T, np.cross(C - tcp, u).T])
+    L = case.loads
+    levels = np.array([L.detailed_preload_N, L.detailed_preload_N + L.detailed_test_N])
+    dirs = np.array([direction_unit(d) for d in L.directions])
+    W = np.zeros((len(dirs), 2, 6))
+    W[:, :, :3] = levels[None, :, None] * dirs[:, None, :]
+    return np.linalg.solve(J[None, None], W[..., None])[..., 0]
+
+
+def joint_loads(case, point: str = "P0") -> tuple[float, float]:
+    """(F_5, F_20) N: the eq. 1 force levels of the most loaded joint (module doc)."""
+    f = np.abs(leg_forces(case, point))
+    d, leg = np.unravel_index(np.argmax(f[:, 1, :]), (f.shape[0], f.shape[2]))
+    return float(f[d, 0, leg]), float(f[d, 1, leg])
+
+
+def check_joint(case, joint: str, mesh: str = "default", point: str = "P0") -> dict:
+    """Contact FE of ``joint`` at the device load of ``point``: the JSON object of ``check-joints``.
+
+    Keys (contract, issue 14): converged, dofs, iterations, seconds, fe_compliance, analytical_compliance
+    (6 x 6, SI), error_pct (per component, on ``fe_component_compliance``: each component with the other
+    five held, as the per-component springs of the analytical model are defined); plus fe_tangent_stiffness, loads_N, factorizations, augmentations, free_dofs,
+    retained_dofs, condense_s, secant_axial_m_per_N, closed_points, mesh, point. A joint that does not
+    converge raises :class:`femcheck.errors.ConvergenceError` (residual history, chattering points).
+    """
+    from femcheck.fe_device import joint_fe as jf
+
+    loads = joint_loads(case, point)
+    model = jf.build_joint(case, joint, mesh)
+    an = jf.analytical_compliance(case, joint, loads)
+    # penetration accepted: 1e-3 of the analytical approach at the preload (the compared quantity)
+    tol = 1e-3 * float(an[2, 2]) * min(loads)
+    # spherical: the ball is pressed into the seat (−z); universal: the link pushes its yoke along +z
+    sign = -1.0 if joint == "spherical" else 1.0
+    r = jf.solve_joint(model, loads, sign, penetration_tol=tol)
+    fe = r.fe_compliance
+    return {"joint": joint, "mesh": mesh, "point": point.upper(), "converged": True, "dofs": r.dofs,
+            "free_dofs": r.free_dofs, "retained_dofs": r.retained, "iterations": r.iterations,
+            "factorizations": r.factorizations + model.factorizations, "augmentations": r.augmentations,
+            "seconds": r.seconds, "condense_s": r.condense_s, "loads_N": list(loads),
+            "secant_axial_m_per_N": r.secant_axial_m_per_N, "closed_points": r.closed_points,
+            "fe_compliance": _json_matrix(fe), "analytical_compliance": _json_matrix(an),
+            "fe_component_compliance": _json_matrix(r.component_compliance[None])[0],
+            "fe_tangent_stiffness": _json_matrix(r.tangent_stiffness),
+            "error_pct": jf.error_pct(r.component_compliance, an)}
+
+
+def _json_matrix(C: np.ndarray) -> list:
+    """6 x 6 as nested lists; infinite entries (a mechanism) as None (JSON has no inf)."""
+    return [[float(v) if math.isfinite(v) else None for v in row] for row in np.asarray(C)]
+
+
+def joint_table_rows(results: list[dict]) -> list[dict]:
+    """Joint table (issue 14 part 3): one row per (joint, component) with FE and analytical compliance
+    (SI), error %, and the law the FE supports where the closed form is off by more than 10 %."""
+    rows = []
+    for res in results:
+        fe, an = res["fe_component_compliance"], res["analytical_compliance"]
+        for comp, k in TABLE_COMPONENTS:
+            f, a = fe[k], an[k][k]
+            err = None if (f is None or a in (None, 0.0)) else 100.0 * (f - a) / a
+            flag = err is not None and abs(err) > FLAG_PCT
+            rows.append({"joint": res["joint"], "component": comp, "fe_compliance": f, "analytical_compliance": a,
+                         "error_pct": err, "off_by_more_than_10pct": flag,
+                         "better_law": _better_law(res["joint"], comp) if flag else ""})
+    return rows
+
+
+def _better_law(joint: str, component: str) -> str:
+    if joint == "universal" and component in ("axial", "lateral"):
+        return "conformal pin-in-bore contact (Persson) with yoke bulk, instead of Hertz line contact"
+    if joint == "spherical" and component == "axial":
+        return "Hertz plus seat-bulk term (finite seat thickness)"
+    return "FE-measured compliance (the closed-form stick law is not resolved by the analytical model)"
+
+
+def write_joint_table_csv(rows: list[dict]) -> str:
+    """CSV text of :func:`joint_table_rows` (compliances in SI, error in %)."""
+    buf = io.StringIO()
+    keys = ("joint", "component", "fe_compliance", "analytical_compliance", "error_pct", "off_by_more_than_10pct",
+            "better_law")
+    w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: ("" if r[k] is None else r[k]) for k in keys})
+    return buf.getvalue()
+
+
+def joint_law_adjustments(results: list[dict]):
+    """The FE-measured joint laws as an option of the extended analytical model (issue 14 part 3).
+
+    A leg with ideal passive joints is a two-force member, so its joints work along their axes: the
+    axial compliance is the joint law that enters the leg. This returns
+    :class:`femcheck.chain.haptic_6psu_model.ChainAdjustments` whose ``element_scale`` multiplies the
+    ``sp`` and ``uj`` element compliances of every chain by FE / closed form of the axial component
+    (``check_joint`` results, one per joint type; a joint not given keeps its closed form, factor 1).
+    ``femcheck diagnose`` and the sweeps take such adjustments (``evaluate(..., adjust=...)``).
+    """
+    from femcheck.chain.haptic_6psu_model import ELEMENTS, ChainAdjustments
+
+    scale = np.ones((6, len(ELEMENTS)))
+    for res in results:
+        fe, an = res["fe_component_compliance"][2], res["analytical_compliance"][2][2]
+        if fe is None or not an:
+            raise FemcheckError(f"{res['joint']} joint: no finite axial compliance to build the joint law from")
+        scale[:, ELEMENTS.index("sp" if res["joint"] == "spherical" else "uj")] = fe / an
+    return ChainAdjustments(element_scale=scale)
+
+
+def joint_table_html(rows: list[dict]) -> str:
+    """The joint table as an HTML section for ``reports/verify/report.html`` (the integrator adds it
+    through the verify report's section API): compliances in SI, error %, the flagged laws named."""
+    import html
+
+    def num(v, fmt):
+        return "∞" if v is None else format(v, fmt)
+
+    body = "".join(
+        f"<tr><td>{html.escape(r['joint'])}</td><td>{r['component']}</td><td>{num(r['fe_compliance'], '.4g')}</td>"
+        f"<td>{num(r['analytical_compliance'], '.4g')}</td><td>{'–' if r['error_pct'] is None else format(r['error_pct'], '+.1f')}</td>"
+        f"<td>{'off by > 10 %: ' + html.escape(r['better_law']) if r['off_by_more_than_10pct'] else 'within 10 %'}</td></tr>"
+        for r in rows)
+    return ("<section id='joint-table'><h2>Joint table: contact FE vs the analytical joint laws</h2>"
+            "<table><thead><tr><th>joint</th><th>component</th><th>FE compliance (SI)</th>"
+            "<th>analytical (SI)</th><th>error %</th><th>verdict</th></tr></thead><tbody>"
+            f"{body}</tbody></table></section>")

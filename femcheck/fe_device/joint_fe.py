@@ -1,0 +1,441 @@
+"""Passive joints as meshed contact bodies, condensed onto their contact surfaces (issue 14, part 1).
+
+Each joint is meshed with P2 tetrahedra (``geometry.spherical_joint``: ball in a flat or socket seat;
+``geometry.universal_joint``: cross pins in yoke bores, with the case's clearance and pin position),
+materials per body from the case, GPTS penalty contact with Coulomb friction, augmented Lagrangian and
+modified Newton–Raphson (:func:`femcheck.fe.newton.solve_contact`, seed 004 §3.3).
+
+Reference nodes. Body a is held (spherical: the seat bottom on the slider; universal: the top faces of
+the platform-yoke arms); body b is tied by a rigid coupling (RBE2) to the reference node b
+(spherical: the ball cap to the link, node B at the ball centre; universal: the link-yoke arm bottoms,
+node at their centre). The joint's 6 x 6 compliance is the one of node b relative to the held body a,
+in the joint frame (spherical: z = seat normal; universal: frame B_i, z = link axis, x = a1, y = a2).
+
+Static condensation (why it converges). The monolithic solve carries every interior DOF through every
+contact iteration. Here the constrained stiffness K_q = Tᵀ K T is split into the DOFs the contact
+operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once (sparse
+direct, :func:`femcheck.fe.linear_solver.factorize`) and the Schur complement
+
+    S = K_rr − K_ri K_ii⁻¹ K_ir                               (exact for the linear bodies)
+
+is formed with one multi-right-hand-side back-substitution. The contact iterations (status changes,
+Uzawa updates, refactorizations) then run on the small dense S only. The initial active set is the one
+the Hertz patch predicts: every contact point whose initial gap is within ``closure`` (the clearance
+plus the Hertz approach at the largest load) starts closed; the load is stepped (the eq. 1 levels).
+
+Compliances (SI: m/N, rad/(N m), m/(N m)):
+* secant along the joint axis for the eq. 1 increment: (u(F_20) − u(F_5)) / (F_20 − F_5);
+* tangent 6 x 6 at the test state: the condensed iteration matrix with the converged contact status
+  (closed points: ε_n, sticking points: ε_t), reduced to node b; components the contact cannot carry
+  (a frictionless or fully sliding rotation) come out as ``inf``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from femcheck.errors import ConvergenceError, FemcheckError
+
+log = logging.getLogger(__name__)
+
+JOINTS = ("spherical", "universal")
+MESH_FACTORS = {"coarse": 2.0, "default": 1.0, "fine": 0.5}
+COMPONENTS = ("u_x", "u_y", "u_z", "theta_x", "theta_y", "theta_z")
+
+
+class JointGeometryError(FemcheckError):
+    """Initial interpenetration beyond the clearance, or a clearance the mesh cannot resolve."""
+
+
+@dataclasses.dataclass(frozen=True)
+class CondensedJoint:
+    """Joint FE condensed onto its contact DOFs and reference node.
+
+    ``S`` (n_r, n_r) dense N/m Schur complement; ``pairs`` contact pairs with operators on the n_r
+    retained DOFs; ``ref`` (6,) indices of node b in the retained set; ``dofs`` mesh DOFs (P2, 3 per
+    node); ``free_dofs`` after constraints; ``retained`` n_r; ``condense_s`` wall time; ``gap0_min``,
+    ``clearance_m``, ``contact_h_m`` (m) for the geometry checks; ``factorizations`` of K_ii (1);
+    ``candidate_points`` of ``contact_points`` kept in the contact iterations (:func:`_candidates`);
+    ``recover`` the callable that returns the gaps of *all* contact points from a condensed displacement.
+    """
+
+    joint: str
+    S: np.ndarray
+    pairs: tuple
+    ref: np.ndarray
+    dofs: int
+    free_dofs: int
+    retained: int
+    condense_s: float
+    clearance_m: float
+    contact_h_m: float
+    factorizations: int
+    candidate_points: int
+    contact_points: int
+    recover: object = dataclasses.field(repr=False, compare=False, default=None)
+    full_pairs: tuple = dataclasses.field(repr=False, compare=False, default=())
+
+
+def _materials(pm, mats: dict):
+    names = [b.name for b in pm.bodies]
+    key = [next(k for k in mats if k in names[b]) for b in pm.body_of_tet]
+    E = np.array([mats[k].E_Pa for k in key])
+    nu = np.array([mats[k].nu for k in key])
+    return E, nu
+
+
+def _mesh_size(case, joint: str, mesh: str) -> float:
+    if mesh not in MESH_FACTORS:
+        raise FemcheckError(f"--mesh {mesh!r}: expected one of {', '.join(MESH_FACTORS)}")
+    m = case.solid.mesh
+    base = m.spherical_joint_size_m if joint == "spherical" else m.universal_joint_size_m
+    return MESH_FACTORS[mesh] * base
+
+
+def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float = 100.0,
+                friction: float | None = None) -> CondensedJoint:
+    """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ."""
+    from femcheck.fe import constraints as cs
+    from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
+    from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
+
+    if joint not in JOINTS:
+        raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)} or all")
+    size = _mesh_size(case, joint, mesh)
+    t0 = time.perf_counter()
+    if joint == "spherical":
+        from geometry import spherical_joint
+        sj = case.spherical_joint
+        pm = spherical_joint.build(case, size)
+        mats = {"ball": sj.ball_material, "seat": sj.seat_material}
+        mu = case.solid.spherical_joint.friction if friction is None else friction
+        held, coupled, pairs_spec = "sj_seat_mount", "sj_ball_link", [("sj_seat_contact", "sj_ball_contact", sj.seat_material)]
+        clearance = 0.0
+    else:
+        from geometry import universal_joint
+        uj = case.universal_joint
+        pm = universal_joint.build(case, size)
+        mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
+        mu = case.solid.universal_joint.friction if friction is None else friction
+        held, coupled = "uj_platform_mount", "uj_link_mount"
+        pairs_spec = [(f"uj_a{k}_bore_contact", f"uj_a{k}_pin_contact", uj.bore_material) for k in (1, 2)]
+        clearance = float(case.solid.universal_joint.pin_clearance_m)
+    msh = pm.to_skfem()
+    basis = vector_basis(msh, 2)
+    E, nu = _materials(pm, mats)
+    K = assemble_stiffness(basis, E, nu)
+    nref = 2 if joint == "universal" else 1
+    ndof, refs = cs.append_reference_nodes(basis.N, nref)
+    ref_b = np.asarray(refs[0])
+    ref_point_b = np.asarray(pm.regions[coupled].reference_point, float) if hasattr(pm, "regions") else np.zeros(3)
+    pts, trip = dof_triplets(basis, basis.get_dofs(coupled).all())
+    parts = [cs.clamp(ndof, basis.get_dofs(held).all()), cs.rigid_coupling(ndof, ref_b, ref_point_b, pts, trip)]
+    if joint == "universal":
+        hp, ht = dof_triplets(basis, basis.get_dofs("uj_hub").all())
+        hub_point = np.asarray(pm.regions["uj_hub"].reference_point, float)
+        parts.append(cs.rigid_coupling(ndof, np.asarray(refs[1]), hub_point, hp, ht))
+    C = cs.combine(*parts)
+    pairs, h_c = [], np.inf
+    for slave, master, mat in pairs_spec:
+        sf, mf = msh.boundaries[slave], msh.boundaries[master]
+        eps = default_penalty(msh, sf, mat.E_Pa, penalty_factor)
+        pr = pair_surfaces(basis, sf, mf, penalty_n=eps, friction=mu, name=slave, ndof=ndof)
+        pairs.append(pr)
+        h_c = min(h_c, float(np.min(mat.E_Pa * penalty_factor / eps)))
+    _check_gaps(joint, pairs, clearance, h_c)
+    # universal joint pushed along +z by the link: the link bore (a2) closes on its first-contact line,
+    # the cross lifts and the platform bore (a1) closes on its opposite line (across 2c)
+    lines = ("opposite", "first") if joint == "universal" else ("both",)
+    cand = [_candidates(p, clearance, ln) for p, ln in zip(pairs, lines)]
+    S, red_pairs, ref_r, nfree, nret, nfac, recover = _condense(K, C, pairs, cand, ref_b)
+    return CondensedJoint(joint, S, tuple(red_pairs), ref_r, int(basis.N), nfree, nret, time.perf_counter() - t0,
+                          clearance, h_c, nfac, int(sum(c.sum() for c in cand)), int(sum(p.n_points for p in pairs)),
+                          recover, tuple(pairs))
+
+
+def _check_gaps(joint: str, pairs, clearance: float, h_c: float) -> None:
+    """Named errors: initial interpenetration beyond the clearance, and a clearance the mesh cannot resolve.
+
+    Nodes lie exactly on the pin, bore and ball surfaces, so an initial gap g0 < 0 is the chord error of
+    the straight-sided facets (sagitta ≈ h²/(8 r)). Beyond the clearance (or beyond 0.1 % of the contact
+    edge where there is none) the bodies start interpenetrating; for a pin in its bore, a chord error
+    above half the clearance means the clearance is not resolved (the gap field is mostly facet noise).
+    """
+    g0 = np.concatenate([p.g0 for p in pairs])
+    pen = float(max(-g0.min(), 0.0))
+    if pen > max(clearance, 1e-3 * h_c):
+        raise JointGeometryError(f"{joint} joint: initial interpenetration {pen:.3g} m exceeds the clearance "
+                                 f"{clearance:.3g} m (check the case's [{joint}_joint] / [solid.{joint}_joint] dimensions)")
+    if joint == "universal" and clearance > 0 and pen > 0.5 * clearance:
+        raise JointGeometryError(f"universal joint: pin clearance {clearance:.3g} m is not resolved by the contact mesh "
+                                 f"(facet-chord error {pen:.3g} m > half the clearance); use a finer --mesh or raise "
+                                 f"[solid.universal_joint] pin_clearance_m")
+
+
+#: candidate band of a pin in its bore: points within this angle of the bore's bottom or top line
+CANDIDATE_ANGLE_RAD = 0.35
+
+
+def _candidates(pair, clearance: float, lines: str = "both") -> np.ndarray:
+    """Contact points kept in the iterations: the Hertz-predicted contact zones and a margin.
+
+    Ball in seat: every point of the contact region (it is already the Hertz zone plus margin). Pin in
+    bore with clearance c: the gap is c (1 − cos θ) from the line of first contact (θ = 0) and 2c − that
+    on the opposite line, the one a load reversal closes; the Hertz half-width of the conformal line
+    contact at 20 N is a few degrees, so points within ``CANDIDATE_ANGLE_RAD`` (20°) of either line are
+    kept. ``lines`` ('first' | 'opposite' | 'both') selects the line(s) the load direction closes (the
+    universal joint pushed along +z closes the link bore on its first-contact line and the platform bore
+    on its opposite line, across 2c). The kept set is verified after the solve: every dropped point must
+    still be open.
+    """
+    if clearance <= 0:
+        return np.ones(pair.n_points, bool)
+    band = clearance * (1.0 - math.cos(CANDIDATE_ANGLE_RAD))
+    first, opposite = pair.g0 <= band, pair.g0 >= 2.0 * clearance - band
+    return {"first": first, "opposite": opposite, "both": first | opposite}[lines]
+
+
+#: columns per block of the multi-right-hand-side back-substitution (bounds memory to n_i x 256 x 8 B)
+BLOCK = 256
+
+
+def _prune(B) -> sp.csr_matrix:
+    """Drop the round-off entries of a contact operator: P2 shape functions of the nodes off a facet
+    vanish on it, so only the facet's 6 nodes (per side) carry weight (fewer retained DOFs)."""
+    B = sp.csr_matrix(B)
+    B.data[np.abs(B.data) < 1e-12 * np.abs(B.data).max()] = 0.0
+    B.eliminate_zeros()
+    return B
+
+
+def _condense(K, C, pairs, cand, ref_b):
+    """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc), blockwise."""
+    from femcheck.fe.constraints import pad
+    from femcheck.fe.linear_solver import factorize
+
+    T = C.T
+    K = pad(sp.csr_matrix(K), C.ndof)
+    Kq = sp.csr_matrix(T.T @ (K @ T))
+    Bn_all = [_prune(p.B_n @ T) for p in pairs]
+    Bt_all = [_prune(p.B_t @ T) for p in pairs]
+    Bn = [b[c] for b, c in zip(Bn_all, cand)]
+    Bt = [b[np.flatnonzero(np.repeat(c, 2))] for b, c in zip(Bt_all, cand)]
+    # node b's reduced DOFs: the columns of T that move node b, ordered as u_x, u_y, u_z, θ_x, θ_y, θ_z
+    Tb = sp.csr_matrix(T[ref_b])
+    ref_q = np.unique(Tb.indices)
+    if ref_q.size != 6:
+        raise FemcheckError(f"reference node maps to {ref_q.size} reduced DOFs, expected 6")
+    ref_q = ref_q[np.argsort(np.argmax(np.abs(Tb[:, ref_q].toarray()), axis=0))]
+    touched = np.unique(np.concatenate([b.indices for b in Bn + Bt] + [ref_q]))
+    n = Kq.shape[0]
+    mask = np.zeros(n, bool)
+    mask[touched] = True
+    r, i = np.flatnonzero(mask), np.flatnonzero(~mask)
+    Kii = sp.csc_matrix(Kq[i][:, i])
+    Kir = sp.csc_matrix(Kq[i][:, r])
+    fac = factorize(Kii, "auto")
+    S = Kq[r][:, r].toarray()
+    Kri = sp.csr_matrix(Kir.T)
+    for j in range(0, r.size, BLOCK):
+        X = fac.solve(Kir[:, j:j + BLOCK].toarray())
+        S[:, j:j + BLOCK] -= Kri @ X
+    S = 0.5 * (S + S.T)
+    pos = np.full(n, -1)
+    pos[r] = np.arange(r.size)
+    red = [dataclasses.replace(p, B_n=sp.csr_matrix(bn[:, r]), B_t=sp.csr_matrix(bt[:, r]),
+                               g0=p.g0[c], weights=p.weights[c], points=p.points[c], normal=p.normal[c],
+                               t1=p.t1[c], t2=p.t2[c], penalty_n=p.penalty_n[c], penalty_t=p.penalty_t[c],
+                               slave_facet=p.slave_facet[c], master_facet=p.master_facet[c],
+                               projection_distance=p.projection_distance[c])
+           for p, bn, bt, c in zip(pairs, Bn, Bt, cand)]
+
+    def recover(u_r):
+        """Gaps (m) of all contact points of every pair for a condensed displacement u_r (n_r,)."""
+        q = np.zeros(n)
+        q[r] = u_r
+        q[i] = -fac.solve(Kir @ u_r)
+        return [p.g0 + b @ q for p, b in zip(pairs, Bn_all)]
+
+    return S, red, pos[ref_q], int(n), int(r.size), 1, recover
+
+
+@dataclasses.dataclass(frozen=True)
+class JointResponse:
+    """Contact-FE response of one joint at one load state (SI, joint frame; module doc).
+
+    ``loads_N`` the force levels along the joint axis (eq. 1: preload, test); ``axial_m`` (n,) node-b
+    displacement along the load; ``secant_axial_m_per_N``; ``tangent`` (6, 6) stick compliance at the test
+    load; ``closed_points`` contact points closed at the test load; ``iterations``, ``factorizations``,
+    ``augmentations`` of the contact solve; ``residual_history``; ``dofs``, ``free_dofs``, ``retained``;
+    ``seconds`` (total), ``condense_s``.
+    """
+
+    joint: str
+    loads_N: tuple
+    axial_m: np.ndarray
+    secant_axial_m_per_N: float
+    tangent: np.ndarray
+    tangent_stiffness: np.ndarray
+    closed_points: int
+    iterations: int
+    factorizations: int
+    augmentations: int
+    dofs: int
+    free_dofs: int
+    retained: int
+    seconds: float
+    condense_s: float
+
+    @property
+    def fe_compliance(self) -> np.ndarray:
+        """6 x 6: the tangent with its axial entry replaced by the eq. 1 secant (the compared state)."""
+        C = self.tangent.copy()
+        C[2, 2] = self.secant_axial_m_per_N
+        return C
+
+    @property
+    def component_compliance(self) -> np.ndarray:
+        """(6,) compliance of each component with the other five held, 1 / K_kk of the tangent stiffness,
+        axial = the eq. 1 secant: what a per-component joint spring of the analytical model describes
+        (a free ball rolls about its contact point under a lateral force at B; the link prevents that)."""
+        with np.errstate(divide="ignore"):
+            c = np.where(np.diag(self.tangent_stiffness) > 0, 1.0 / np.diag(self.tangent_stiffness), np.inf)
+        c[2] = self.secant_axial_m_per_N
+        return c
+
+
+def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
+                penetration_tol: float) -> JointResponse:
+    """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
+
+    ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
+    approach at the smallest load, e.g. 1e-3 of the analytical one)."""
+    from femcheck.fe.contact import status as st
+    from femcheck.fe.newton import ContactProblem, solve_contact
+
+    t0 = time.perf_counter()
+    loads = tuple(float(F) for F in loads_N)
+    Fmax = max(loads)
+    n = model.S.shape[0]
+    # the eq. 1 load path: node b moves along the joint axis only (the leg holds its other components),
+    # frictionless normal contact (under a pure axial load friction does no work on a symmetric patch)
+    held = np.delete(model.ref, 2)
+    keep = np.setdiff1d(np.arange(n), held)
+    ax = int(np.searchsorted(keep, model.ref[2]))
+    f = np.zeros(keep.size)
+    f[ax] = axis_sign * Fmax
+    pairs = tuple(dataclasses.replace(p, B_n=sp.csr_matrix(p.B_n[:, keep]), B_t=sp.csr_matrix(p.B_t[:, keep]),
+                                      friction=0.0) for p in model.pairs)
+    problem = ContactProblem(K=sp.csr_matrix(model.S[np.ix_(keep, keep)]), f=f, pairs=pairs)
+    # Hertz-predicted active set: every point within the clearance (plus a tiny margin) starts closed
+    closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m
+    res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=closure,
+                        penetration_tol=penetration_tol, max_iter=150)
+    u = np.array([axis_sign * s.u[ax] for s in res.steps])
+    sec = float((u[-1] - u[0]) / (loads[-1] - loads[0]))
+    closed = [ps.status != st.OPEN for ps in res.steps[-1].pairs]
+    if model.recover is not None and model.candidate_points < model.contact_points:
+        u_full = np.zeros(n)
+        u_full[keep] = res.steps[-1].u
+        gaps = model.recover(u_full)
+        # a dropped point violates the candidate band when it penetrates more than it did at the start
+        # (initial facet-chord noise, accepted by the geometry check, is not a contact the band missed)
+        pen = max(float(np.max(-g - np.maximum(-p0.g0, 0.0))) for g, p0 in zip(gaps, model.full_pairs))
+        log.info("%s: largest penetration growth over all contact points %.3g m", model.joint, pen)
+        if pen > 10.0 * penetration_tol:
+            raise ConvergenceError(f"{model.joint} joint: a contact point outside the Hertz-predicted candidate band "
+                                   f"penetrates by {pen:.3g} m; widen CANDIDATE_ANGLE_RAD", [], {"penetration_m": pen})
+    tangent, stiffness = _tangent(model, closed)
+    return JointResponse(model.joint, loads, u, sec, tangent, stiffness, int(sum(int(c.sum()) for c in closed)),
+                         int(sum(res.iterations_per_step)),
+                         int(res.timings.get("factorizations", 0)), int(sum(s.augmentations for s in res.steps)),
+                         model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
+                         model.condense_s)
+
+
+def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
+    """6 x 6 stick compliance of node b: the condensed matrix plus ε_n on the closed points and ε_t on the
+    same points held stuck (the Mindlin stick state the analytical laws describe)."""
+    A = model.S.copy()
+    for p, closed in zip(model.pairs, closed_sets):
+        if closed.any():
+            Bn = p.B_n[closed]
+            A += (Bn.T @ sp.diags(p.penalty_n[closed] * p.weights[closed]) @ Bn).toarray()
+        stick = closed
+        if stick.any():
+            rows = np.flatnonzero(np.repeat(stick, 2))
+            Bt = p.B_t[rows]
+            w = np.repeat(p.penalty_t[stick] * p.weights[stick], 2)
+            A += (Bt.T @ sp.diags(w) @ Bt).toarray()
+    ref = model.ref
+    o = np.setdiff1d(np.arange(A.shape[0]), ref)
+    Aoo = A[np.ix_(o, o)]
+    Aor = A[np.ix_(o, ref)]
+    try:
+        X = np.linalg.solve(Aoo, Aor)
+    except np.linalg.LinAlgError:
+        X = np.linalg.lstsq(Aoo, Aor, rcond=None)[0]
+    Kb = A[np.ix_(ref, ref)] - Aor.T @ X
+    Kb = 0.5 * (Kb + Kb.T)
+    w, V = np.linalg.eigh(Kb)
+    tol = 1e-9 * max(float(w.max()), 1e-300)
+    Cb = np.zeros((6, 6))
+    for k in range(6):
+        if w[k] > tol:
+            Cb += np.outer(V[:, k], V[:, k]) / w[k]
+    for k in range(6):  # a mechanism of the contact (no stiffness): infinite compliance where it moves
+        if w[k] <= tol:
+            big = np.abs(V[:, k]) > 1e-3
+            Cb[np.ix_(big, big)] = np.inf
+    return Cb, Kb
+
+
+def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
+    """6 x 6 compliance of the closed-form joint laws (seed 000 §4.4.1) in the joint frame, SI.
+
+    spherical: axial = Hertz eq. 1 secant (δ_H(F20) − δ_H(F5)) / (F20 − F5) (Johnson eq. 4.23),
+    lateral = Mindlin stick 1/(8 G* a) (Johnson eq. 7.32), tilt = 1/(8 G* a R_b²), spin = 3/(16 G* a³);
+    universal (frame B): lateral x, y = c_UC (Hertz line contact), axial z = c_UC + c_UB (line contact
+    plus pin bending, seed 000 eqs. 36–41), rotations about a1, a2 = 1/(k_line r_pin²) (stick),
+    spin about z = 0 (tied in the analytical model).
+    """
+    from femcheck.chain import device_parameters
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.loads import hertz_approach
+
+    fr = joint_friction(case)
+    F0, F1 = float(min(loads_N)), float(max(loads_N))
+    C = np.zeros((6, 6))
+    if joint == "spherical":
+        d = hertz_approach(np.array([F0, F1]), fr.E_star_Pa, fr.R_star_m)
+        a = float(fr.contact_radius(F1))
+        kt, ks, _ = fr.stick_stiffness(np.array([F1]))
+        C[2, 2] = (d[1] - d[0]) / (F1 - F0)
+        C[0, 0] = C[1, 1] = 1.0 / (8.0 * fr.G_star_Pa * a)
+        C[3, 3] = C[4, 4] = 1.0 / float(kt[0])
+        C[5, 5] = 1.0 / float(ks[0])
+    else:
+        p = device_parameters(case)
+        c_uc, c_ub = float(np.squeeze(p.c_uc)), float(np.squeeze(p.c_ub))
+        _, _, kp = fr.stick_stiffness(np.array([F1]))
+        C[0, 0] = C[1, 1] = c_uc
+        C[2, 2] = c_uc + c_ub
+        C[3, 3] = C[4, 4] = 1.0 / float(kp[0])
+    return C
+
+
+def error_pct(fe, analytical: np.ndarray) -> dict:
+    """Per component: 100 (FE − analytical) / analytical; None where the analytical law is 0 or either
+    value is infinite (a released or tied component). ``fe``: (6,) component compliances or a 6 x 6."""
+    fe = np.asarray(fe, float)
+    fe = np.diag(fe) if fe.ndim == 2 else fe
+    out = {}
+    for k, name in enumerate(COMPONENTS):
+        a, f = float(analytical[k, k]), float(fe[k])
+        out[name] = None if (a == 0 or not math.isfinite(a) or not math.isfinite(f)) else 100.0 * (f - a) / a
+    return out
