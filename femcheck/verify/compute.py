@@ -33,7 +33,8 @@ def error_rows(av: AnalyticalVerification, joints: str) -> list[dict]:
 
 
 def fe_error_rows(av: AnalyticalVerification, fe, level: str, fe_joints: str | None = None) -> list[dict]:
-    """Rows ``point, direction, joints, analytical_mm, fe_mm, rel_error_pct`` (100 |FE - analytical| / |FE|) for
+    """The one comparison: the analytical and FE results share the keyed accessor
+    ``deflection(point, direction, level, joints)`` (m, along the load), so any two of them compare here. Rows ``point, direction, joints, analytical_mm, fe_mm, rel_error_pct`` (100 |FE - analytical| / |FE|) for
     one level; ``joints`` is the analytical idealization compared. The FE joints are ``fe_joints`` (e.g.
     ``contact``: the detailed FE with frictional contact joints, compared with both idealizations) or, by
     default, the same idealization as the analytical model (couplings tied / released)."""
