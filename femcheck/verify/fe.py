@@ -20,6 +20,7 @@ from femcheck.fe_device.device_model import (build_link, guideway_task, point_mo
                                              solve_point)
 from femcheck.fe_device.joints import FE_JOINTS, IDEALIZATIONS
 from femcheck.fe_device.mesh_levels import MeshSizes, mesh_sizes
+from femcheck.kinematics.points import as_point_set
 
 log = logging.getLogger(__name__)
 

@@ -44,13 +44,16 @@ _average = average_row
 
 @dataclasses.dataclass(frozen=True)
 class VerifyRun:
+    """A finished verification run: its folder, the analytical and FE results, the drift lines, the files
+    written (relative to ``out_dir``), wall time (s), threshold failures and every :class:`Check`."""
+
     out_dir: Path
     analytical: AnalyticalVerification
-    drift: tuple[str, ...]
+    drift: tuple[str, ...]          # baseline drift lines (analytical, then FE); empty = none
     files: tuple[str, ...]
     seconds: float
-    fe: object = None
-    failures: tuple[str, ...] = ()
+    fe: object = None               # FEVerification, or None when no FE level ran
+    failures: tuple[str, ...] = ()  # threshold and mesh-convergence failures (with --check)
     checks: tuple = ()
 
 
