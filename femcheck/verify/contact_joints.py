@@ -53,7 +53,7 @@ def moment_demand(case, points=None, load_N: float | None = None) -> MomentDeman
     mu_sp, mu_uj = case.solid.spherical_joint.friction, case.solid.universal_joint.friction
     ball, pin = [], []
     for d in case.loads.directions:
-        r = evaluate(case, P, np.r_[load * direction_unit(d), 0.0, 0.0, 0.0], model="detailed", joints="rigid")
+        r = evaluate(case, P, np.r_[load * direction_unit(d), 0.0, 0.0, 0.0], model="detailed", joints="rigid", legs=legs)
         F, M_C = r.chain_wrench[..., :3], r.chain_wrench[..., 3:]
         M_B = M_C + np.cross(legs.C - legs.B, F)
         f = np.linalg.norm(F, axis=-1)
