@@ -72,6 +72,7 @@ def _probe(html_text: str, tmp_path) -> dict:
     return out
 
 
+@pytest.mark.slow  # ~13 s: an analytical verify run (plots) plus a browser start
 def test_verify_report_in_headless_browser(tmp_path, case):
     from femcheck.verify.run import run_verify
     run = run_verify(case, tmp_path / "run", points=("P0", "P7"))

@@ -32,7 +32,7 @@ from femcheck.chain.device_parameters import DeviceParameters, device_parameters
 from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
 from femcheck.compliance.sections import Section
 from femcheck.errors import ConvergenceError
-from femcheck.kinematics.frames import rot6, twist_shift
+from femcheck.kinematics.frames import guideway_frames, link_frames, rot6, twist_shift
 from femcheck.kinematics.psu6 import LegGeometry, as_poses, leg_geometry
 
 log = logging.getLogger(__name__)
@@ -108,24 +108,6 @@ def _per_chain(p: DeviceParameters) -> DeviceParameters:
         elif isinstance(v, np.ndarray):
             vals[k] = _column(v)
     return DeviceParameters(**vals)
-
-
-def guideway_frames(case) -> np.ndarray:
-    """(6, 3, 3) guideway frames A_i: columns x_A (radial, orthogonal to e), y_A = e x x_A, z_A = e."""
-    e = np.asarray(case.geometry.guideway_direction, dtype=float)
-    th = case.base_angles_rad
-    radial = np.stack([np.cos(th), np.sin(th), np.zeros(6)], axis=1)
-    x = radial - (radial @ e)[:, None] * e
-    x /= np.linalg.norm(x, axis=1, keepdims=True)
-    y = np.cross(e, x)
-    return np.stack([x, y, np.broadcast_to(e, x.shape)], axis=-1)
-
-
-def link_frames(u: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) link frames B_i: z_B = u, x_B = (-u_y, u_x, 0)/|.|, y_B = z_B x x_B (seed 000 eq. 20)."""
-    x = np.stack([-u[..., 1], u[..., 0], np.zeros(u.shape[:-1])], axis=-1)
-    x /= np.linalg.norm(x, axis=-1, keepdims=True)
-    return np.stack([x, np.cross(u, x), u], axis=-1)
 
 
 def _joint_rotation_twists(legs: LegGeometry) -> tuple[np.ndarray, np.ndarray]:

@@ -6,6 +6,7 @@ from enum import Enum
 import numpy as np
 import typer
 
+from femcheck.kinematics.points import point_index
 from femcheck.kinematics.psu6 import POINT_LABELS, test_points
 
 
@@ -44,7 +45,7 @@ def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, 
     label = (point or "P0").upper()
     if label not in POINT_LABELS:
         raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(POINT_LABELS)}")
-    return test_points(case)[POINT_LABELS.index(label)][None, :], label
+    return test_points(case)[point_index([label])], label
 
 
 def direction_vector(direction: str) -> np.ndarray:

@@ -57,14 +57,12 @@ class PointModel:
 
 def point_geometry(case, points):
     """Leg geometry of ``points`` (labels) -> LegGeometry and the sliders (n, 6) m."""
-    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
-    idx = [POINT_LABELS.index(p) for p in points]
-    legs = leg_geometry(case, test_points(case)[idx], labels=list(points))
-    return legs
+    from femcheck.kinematics.points import point_set
+    return point_set(case, points).legs
 
 
 def point_model(case, legs, k: int, point: str, guideways, link: SuperElement) -> PointModel:
-    from femcheck.chain.haptic_6psu_model import guideway_frames, link_frames
+    from femcheck.kinematics.frames import guideway_frames, link_frames
     u = legs.u[k]
     return PointModel(point=point, A=legs.A, B=legs.B[k], C=legs.C[k], u=u, tcp=legs.tcp[k],
                       R_A=guideway_frames(case), R_B=link_frames(u), G=platform_matrices(legs.C[k], legs.tcp[k]),

@@ -67,17 +67,16 @@ def whole_device_solve(case, point: str, wrench, joints: str = "rigid", guideway
     joints as couplings of the ``joints`` idealization (:mod:`.joints`), platform rigid. ``wrench`` (6,)
     at the TCP (N, N m).
     """
-    from femcheck.chain.haptic_6psu_model import guideway_frames, link_frames
+    from femcheck.kinematics.frames import guideway_frames, link_frames
     from femcheck.fe import constraints as cs
     from femcheck.fe.beam import BeamSection, assemble_beam_stiffness
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
     from femcheck.fe.linear_solver import factorize
-    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
+    from femcheck.kinematics.points import point_set
     from geometry import guideway, proximal_link
 
     t0 = time.perf_counter()
-    k = POINT_LABELS.index(point)
-    legs = leg_geometry(case, test_points(case)[k:k + 1], labels=[point])
+    legs = point_set(case, [point]).legs
     A, B, C, u, s = legs.A, legs.B[0], legs.C[0], legs.u[0], legs.slider[0]
     RA, RB = guideway_frames(case), link_frames(u)
     tcp = legs.tcp[0]

@@ -85,3 +85,21 @@ def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
     s = np.sin(th)
     factor = np.where(th < 1e-8, 0.5, th / (2.0 * np.where(s == 0, 1.0, s)))
     return w * factor[..., None]
+
+
+def guideway_frames(case) -> np.ndarray:
+    """(6, 3, 3) guideway frames A_i: columns x_A (radial, orthogonal to e), y_A = e x x_A, z_A = e."""
+    e = np.asarray(case.geometry.guideway_direction, dtype=float)
+    th = case.base_angles_rad
+    radial = np.stack([np.cos(th), np.sin(th), np.zeros(6)], axis=1)
+    x = radial - (radial @ e)[:, None] * e
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    y = np.cross(e, x)
+    return np.stack([x, y, np.broadcast_to(e, x.shape)], axis=-1)
+
+
+def link_frames(u: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) link frames B_i: z_B = u, x_B = (-u_y, u_x, 0)/|.|, y_B = z_B x x_B (seed 000 eq. 20)."""
+    x = np.stack([-u[..., 1], u[..., 0], np.zeros(u.shape[:-1])], axis=-1)
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    return np.stack([x, np.cross(u, x), u], axis=-1)

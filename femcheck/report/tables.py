@@ -23,25 +23,29 @@ def to_csv(rows: list[dict]) -> str:
     return buf.getvalue()
 
 
-def to_markdown(rows: list[dict], formats: dict[str, str] | None = None) -> str:
-    """GitHub Markdown table; ``formats`` maps a column to a format spec (e.g. ``"{:.3f}"``)."""
-    if not rows:
-        return "(no rows)\n"
+def cells(rows: list[dict], formats: dict[str, str] | None = None) -> tuple[list[str], list[list[str]]]:
+    """Column names and the formatted text of every cell; ``formats`` maps a column to a format spec
+    (e.g. ``"{:.3f}"``) applied to numbers, other values use the default short form."""
     formats = formats or {}
     cols = list(rows[0])
     cell = lambda c, v: formats[c].format(v) if c in formats and isinstance(v, (int, float)) else _fmt(v)
+    return cols, [[cell(c, r[c]) for c in cols] for r in rows]
+
+
+def to_markdown(rows: list[dict], formats: dict[str, str] | None = None) -> str:
+    """GitHub Markdown table of the rows (see :func:`cells` for ``formats``)."""
+    if not rows:
+        return "(no rows)\n"
+    cols, body = cells(rows, formats)
     lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
-    lines += ["| " + " | ".join(cell(c, r[c]) for c in cols) + " |" for r in rows]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in body]) + "\n"
 
 
 def to_html(rows: list[dict], formats: dict[str, str] | None = None) -> str:
-    """An HTML <table> of the rows."""
+    """An HTML <table> of the rows (see :func:`cells` for ``formats``)."""
     if not rows:
         return "<p>(no rows)</p>"
-    formats = formats or {}
-    cols = list(rows[0])
-    cell = lambda c, v: formats[c].format(v) if c in formats and isinstance(v, (int, float)) else _fmt(v)
+    cols, body = cells(rows, formats)
     head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(cell(c, r[c]))}</td>" for c in cols) + "</tr>" for r in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    trs = "".join("<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in r) + "</tr>" for r in body)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{trs}</tbody></table>"

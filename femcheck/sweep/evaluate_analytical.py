@@ -118,12 +118,13 @@ def run_analytical_task(task: AnalyticalTask) -> dict[str, np.ndarray]:
 
     Columns: sample_id, sample_key, point, ``p:<key>`` ..., the result columns of the module docstring, ok.
     """
-    from femcheck.kinematics.psu6 import POINT_LABELS, test_points
+    from femcheck.kinematics.points import point_index
+    from femcheck.kinematics.psu6 import test_points
     if task.model not in MODELS:
         raise FemcheckError(f"model {task.model!r}: not an analytical model; expected one of {list(MODELS)}")
     case = task.case
     P_all = test_points(case)
-    idx = [POINT_LABELS.index(p) for p in task.points]
+    idx = point_index(task.points)
     n_pts, k = len(idx), task.n_samples
     array_cols = [j for j, kind in enumerate(task.kinds) if kind == "array"]
     variant_cols = [j for j, kind in enumerate(task.kinds) if kind == "variant"]

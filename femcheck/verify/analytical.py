@@ -11,7 +11,8 @@ import dataclasses
 import numpy as np
 
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
-from femcheck.kinematics.psu6 import POINT_LABELS, condition_number, leg_geometry, test_points
+from femcheck.kinematics.points import PointSet, as_point_set
+from femcheck.kinematics.psu6 import POINT_LABELS, condition_number
 from femcheck.kinematics.directions import direction_unit
 
 LEVELS = ("simplified", "detailed")
@@ -64,11 +65,12 @@ class AnalyticalVerification:
         return {ELEMENT_NAMES[e]: float(v) for e, v in zip(ELEMENTS, c.mean(axis=0))}
 
 
-def run_analytical(case, points: tuple[str, ...] = POINT_LABELS, directions=None) -> AnalyticalVerification:
-    """Evaluate both levels and idealizations at ``points`` under the case's test loads."""
+def run_analytical(case, points: PointSet | tuple[str, ...] = POINT_LABELS, directions=None) -> AnalyticalVerification:
+    """Evaluate both levels and idealizations at ``points`` (a :class:`PointSet`, or labels) under the case's
+    test loads, from the point set's one inverse-kinematics pass."""
     directions = tuple(directions or case.loads.directions)
-    idx = [POINT_LABELS.index(p) for p in points]
-    poses = test_points(case)[idx]
+    pts = as_point_set(case, points)
+    points, poses, legs = pts.labels, pts.poses, pts.legs
     rows = []
     kcond = {}
     for joints in JOINTS:
@@ -78,7 +80,7 @@ def run_analytical(case, points: tuple[str, ...] = POINT_LABELS, directions=None
             for d in directions:
                 u = direction_unit(d)
                 W = np.concatenate([load * u, np.zeros(3)])
-                r = evaluate(case, poses, W, model=level, joints=joints, labels=list(points))
+                r = evaluate(case, poses, W, model=level, joints=joints, labels=list(points), legs=legs)
                 for k, p in enumerate(points):
                     rows.append(AnalyticalRow(p, d, level, joints, load, float(r.twist[k, :3] @ u),
                                               tuple(r.twist[k]), tuple(r.contributions[k])))
@@ -89,7 +91,6 @@ def run_analytical(case, points: tuple[str, ...] = POINT_LABELS, directions=None
                     Kh[:, 3:, :] /= Rp
                     worst = np.maximum(worst, np.linalg.cond(Kh))
         kcond[joints] = worst
-    legs = leg_geometry(case, poses, labels=list(points))
     return AnalyticalVerification(rows=tuple(rows), points=tuple(points), directions=directions,
                                   jacobian_condition=condition_number(case, legs), stiffness_condition=kcond,
                                   sliders_m=legs.slider)

@@ -45,16 +45,15 @@ def moment_demand(case, points=None, load_N: float | None = None) -> MomentDeman
     """
     from femcheck.chain import evaluate
     from femcheck.kinematics.directions import direction_unit
-    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
+    from femcheck.kinematics.points import as_point_set
 
-    labels = list(points or POINT_LABELS)
-    P = test_points(case)[[POINT_LABELS.index(p) for p in labels]]
-    legs = leg_geometry(case, P, labels=labels)
+    pts = as_point_set(case, points)
+    labels, P, legs = list(pts.labels), pts.poses, pts.legs
     load = case.loads.detailed_test_N if load_N is None else load_N
     mu_sp, mu_uj = case.solid.spherical_joint.friction, case.solid.universal_joint.friction
     ball, pin = [], []
     for d in case.loads.directions:
-        r = evaluate(case, P, np.r_[load * direction_unit(d), 0.0, 0.0, 0.0], model="detailed", joints="rigid")
+        r = evaluate(case, P, np.r_[load * direction_unit(d), 0.0, 0.0, 0.0], model="detailed", joints="rigid", legs=legs)
         F, M_C = r.chain_wrench[..., :3], r.chain_wrench[..., 3:]
         M_B = M_C + np.cross(legs.C - legs.B, F)
         f = np.linalg.norm(F, axis=-1)

@@ -16,10 +16,11 @@ import time
 
 import numpy as np
 
-from femcheck.fe_device.device_model import (build_link, guideway_task, point_geometry, point_model,
+from femcheck.fe_device.device_model import (build_link, guideway_task, point_model,
                                              solve_point)
 from femcheck.fe_device.joints import FE_JOINTS, IDEALIZATIONS
 from femcheck.fe_device.mesh_levels import MeshSizes, mesh_sizes
+from femcheck.kinematics.points import as_point_set
 
 log = logging.getLogger(__name__)
 
@@ -62,9 +63,9 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
     the verification passes the ratio measured by the contact FE of the spherical joint).
     """
     t0 = time.perf_counter()
-    points = tuple(points)
+    pts = as_point_set(case, points)      # the run's PointSet: no second inverse kinematics
+    points, legs = pts.labels, pts.legs
     sizes = mesh_sizes(case, mesh)
-    legs = point_geometry(case, points)
     note = progress or (lambda desc: None)
     tasks = [(k, i, float(legs.slider[k, i])) for k in range(len(points)) for i in range(6)]
     got: dict = {}

@@ -42,11 +42,11 @@ def ordered(sections: list[Section]) -> list[Section]:
 
 
 def render_markdown(title: str, intro: str, sections: list[Section]) -> str:
-    md = [f"# {title}\n", f"{intro}\n"]
+    md = [f"# {title}\n\n", f"{intro}\n"]
     for s in ordered(sections):
-        md.append(f"\n## {s.title}\n")
+        md.append(f"\n## {s.title}\n\n")
         if s.note:
-            md.append(f"\n{s.note}\n\n")
+            md.append(f"{s.note}\n\n")
         if s.rows:
             md.append(tables.to_markdown(list(s.rows), s.formats))
         if s.extra_rows:

@@ -23,6 +23,7 @@ import logging
 import time
 from pathlib import Path
 
+from femcheck.kinematics.points import point_set
 from femcheck.report import tables
 from femcheck.report.atomic import write_bytes_atomic, write_text_atomic
 from femcheck.report.verify_plots import contributions_plot, deflection_plot
@@ -43,13 +44,16 @@ _average = average_row
 
 @dataclasses.dataclass(frozen=True)
 class VerifyRun:
+    """A finished verification run: its folder, the analytical and FE results, the drift lines, the files
+    written (relative to ``out_dir``), wall time (s), threshold failures and every :class:`Check`."""
+
     out_dir: Path
     analytical: AnalyticalVerification
-    drift: tuple[str, ...]
+    drift: tuple[str, ...]          # baseline drift lines (analytical, then FE); empty = none
     files: tuple[str, ...]
     seconds: float
-    fe: object = None
-    failures: tuple[str, ...] = ()
+    fe: object = None               # FEVerification, or None when no FE level ran
+    failures: tuple[str, ...] = ()  # threshold and mesh-convergence failures (with --check)
     checks: tuple = ()
 
 
@@ -68,7 +72,7 @@ def _fmt(rows, spec, skip=("point",)) -> dict:
     return {k: spec for k in rows[0] if k not in skip}
 
 
-def _fe_sections(case, av, fe, put, sections: list, out, vtu: bool, pngs: bool, tilt=None) -> tuple[dict, dict]:
+def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: bool, tilt=None) -> tuple[dict, dict]:
     """Tables, plots and files of the FE comparison; appends its sections; returns the error tables and timings."""
     from femcheck.fe_device.results import deformed_png, write_point_vtu
     tabs = {}
@@ -96,7 +100,7 @@ def _fe_sections(case, av, fe, put, sections: list, out, vtu: bool, pngs: bool, 
                 note = ""
         if level == "detailed" and has_contact_joints(fe):
             from femcheck.verify.contact_joints import moment_demand
-            text, trows = contact_section(fe, tabs, moment_demand(case, fe.points), tilt)
+            text, trows = contact_section(fe, tabs, moment_demand(case, pts), tilt)
             put("contact_joints.md", text + "\n" + (tables.to_markdown(trows) if trows else ""))
             if trows:
                 put("contact_joint_tilt.csv", tables.to_csv(trows))
@@ -175,7 +179,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     from femcheck.case.solver_options import apply as apply_solver_choice
     log.info("linear solver: %s", apply_solver_choice(case))
     out = Path(out_dir)
-    av = run_analytical(case, tuple(points) if points else ("P0", "P1", "P2", "P3", "P4", "P5", "P6", "P7", "P8"))
+    pts = point_set(case, points)     # labels -> poses -> inverse kinematics, once for the whole run
+    av = run_analytical(case, pts)
     t_analytical = time.perf_counter() - t0
     files: list[str] = []
 
@@ -194,7 +199,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         t_tilt = time.perf_counter() - tc
     if levels:
         from femcheck.verify.fe import run_fe
-        fe = run_fe(case, av.points, tuple(levels), mesh, jobs, kind=fe_kind, progress=progress, friction=friction)
+        fe = run_fe(case, pts, tuple(levels), mesh, jobs, kind=fe_kind, progress=progress, friction=friction)
 
     sections: list[Section] = []
     rows = deflection_rows(av)
@@ -229,7 +234,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     fe_tabs, fe_times = ({}, {})
     contact_diag = None
     if fe is not None:
-        fe_tabs, fe_times = _fe_sections(case, av, fe, put, sections, out, vtu, pngs, tilt)
+        fe_tabs, fe_times = _fe_sections(case, av, fe, pts, put, sections, out, vtu, pngs, tilt)
         fe_times["ball_tilt_contact_fe"] = round(t_tilt, 2)
         if has_contact_joints(fe) and len(fe.points) == 9:
             from femcheck.verify.contact_diagnosis import diagnose_contact_fe

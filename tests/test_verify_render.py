@@ -1,0 +1,54 @@
+"""verify/ split: the verdict leads the report, verdict.json / junit.xml list every check, one pivot for the
+error tables, worst errors only from checked comparisons (issue 17 item 4, issue 18 item 3)."""
+import json
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from femcheck.verify.check import Check, threshold_checks
+from femcheck.verify.compute import pivot_errors, worst_errors
+from femcheck.verify.render import Section, junit_xml, render_html, render_markdown, verdict_json, verdict_section
+
+CHECKS = [Check("analytical drift", "pass", "no drift"), Check("threshold detailed/rigid +x", "fail", "12 % > 10 %"),
+          Check("FE drift", "skipped", "no --check")]
+
+
+def test_verdict_section_leads_markdown_and_html_wherever_it_is_appended():
+    sections = [Section("Errors", ({"point": "P0", "+x error %": 1.0},)), verdict_section(CHECKS, [], 3.2)]
+    md = render_markdown("t", "intro", sections)
+    assert md.index("## Verdict") < md.index("## Errors")
+    assert "FAIL: 1 passed, 1 failed, 1 skipped; run time 3.2 s." in md
+    html = render_html("t", "intro", sections)
+    assert html.index("<h2>Verdict</h2>") < html.index("<h2>Errors</h2>")
+
+
+def test_verdict_json_and_junit_have_one_entry_per_check():
+    v = json.loads(verdict_json(CHECKS, [], 1.0))
+    assert v["passed"] is False and [c["status"] for c in v["checks"]] == ["pass", "fail", "skipped"]
+    suite = ET.fromstring(junit_xml(CHECKS, 1.0))
+    assert suite.get("tests") == "3" and suite.get("failures") == "1" and suite.get("skipped") == "1"
+    cases = suite.findall("testcase")
+    assert [c.get("name") for c in cases] == [c.name for c in CHECKS]
+    assert cases[1].find("failure").get("message") == "12 % > 10 %" and cases[0].find("failure") is None
+    assert json.loads(verdict_json(CHECKS[:1], [], 1.0))["passed"] is True
+
+
+def test_pivot_gives_rows_then_average_and_max():
+    rng = np.random.default_rng(3)
+    err = {(p, d): float(rng.uniform(0, 20)) for p in ("P0", "P1", "P2") for d in ("+x", "+z")}
+    rows = pivot_errors(err, ("P0", "P1", "P2"), ("+x", "+z"))
+    assert [r["point"] for r in rows] == ["P0", "P1", "P2", "average", "max"]
+    for d in ("+x", "+z"):
+        col = [err[(p, d)] for p in ("P0", "P1", "P2")]
+        assert rows[3][f"{d} error %"] == pytest.approx(np.mean(col), rel=1e-15)  # same numbers, same mean
+        assert rows[4][f"{d} error %"] == max(col)
+
+
+def test_thresholds_and_worst_errors_skip_the_idealization_the_contact_fe_does_not_follow():
+    avg = lambda v: [{"point": "P0", "+x error %": v}, {"point": "average", "+x error %": v}]
+    tabs = {("detailed", "rigid", "contact"): avg(60.0), ("detailed", "released", "contact"): avg(0.8),
+            ("simplified", "rigid", "rigid"): avg(6.0)}
+    checks = {c.name: c.status for c in threshold_checks(tabs)}
+    assert checks == {"threshold detailed/released vs contact FE +x": "pass", "threshold simplified/rigid +x": "fail"}
+    assert [w["table"] for w in worst_errors(tabs)] == ["simplified/rigid", "detailed/released/contact"]
