@@ -23,7 +23,6 @@ $(STAMP): pyproject.toml
 ## Main job on the reference case: analytical (and FE, where available) verification tables under reports/verify/
 verify: $(STAMP)
 	$(PY) -m femcheck verify $(CASE) --out reports/verify --check
-	$(PY) -m femcheck coverage $(CASE) --mesh coarse --json reports/verify/coverage.json
 
 ## Default test suite (CI): everything not marked slow
 test: $(STAMP)

@@ -50,5 +50,17 @@ def test_thresholds_and_worst_errors_skip_the_idealization_the_contact_fe_does_n
     tabs = {("detailed", "rigid", "contact"): avg(60.0), ("detailed", "released", "contact"): avg(0.8),
             ("simplified", "rigid", "rigid"): avg(6.0)}
     checks = {c.name: c.status for c in threshold_checks(tabs)}
-    assert checks == {"threshold detailed/released vs contact FE +x": "pass", "threshold simplified/rigid +x": "fail"}
+    assert checks == {"contact FE follows the expected idealization": "pass",
+                      "threshold detailed/released vs contact FE +x": "pass", "threshold simplified/rigid +x": "fail"}
     assert [w["table"] for w in worst_errors(tabs)] == ["simplified/rigid", "detailed/released/contact"]
+
+
+def test_contact_fe_following_another_idealization_than_expected_fails():
+    """The expected idealization is stated before the run: a contact FE that ends up closer to rigid fails,
+    and its thresholds are checked against the expected (released) one, not the one it happens to follow."""
+    avg = lambda v: [{"point": "P0", "+x error %": v}, {"point": "average", "+x error %": v}]
+    tabs = {("detailed", "rigid", "contact"): avg(3.0), ("detailed", "released", "contact"): avg(40.0)}
+    checks = {c.name: c.status for c in threshold_checks(tabs)}
+    assert checks["contact FE follows the expected idealization"] == "fail"
+    assert checks["threshold detailed/released vs contact FE +x"] == "fail"
+    assert "threshold detailed/rigid vs contact FE +x" not in checks

@@ -43,16 +43,27 @@ def followed_idealization(tabs: dict) -> str | None:
     return min(cand, key=cand.get) if cand else None
 
 
-def threshold_checks(tables_by_level: dict) -> list[Check]:
+#: the idealization the contact-joint FE is expected to follow, stated before it runs: joints that can turn
+#: (ball in seat, pins in bores) carry only their friction moment (CONVENTIONS.md §5, "A solid FE model with
+#: real ball-in-seat and pin-in-bore contact ... should side with released")
+EXPECTED_CONTACT_IDEALIZATION = "released"
+
+
+def threshold_checks(tables_by_level: dict, expected: str = EXPECTED_CONTACT_IDEALIZATION) -> list[Check]:
     """A check per (level, joints, direction) mean error against ERROR_THRESHOLDS[level]: the matching
-    idealizations, and the contact FE against the idealization it follows (issue 6)."""
+    idealizations, and the contact FE against the ``expected`` idealization (stated before the run, not
+    chosen after it); plus one check that the contact FE follows ``expected`` rather than another one."""
     out = []
     followed = followed_idealization(tables_by_level)
+    if followed is not None:
+        ok = followed == expected
+        out.append(Check("contact FE follows the expected idealization", "pass" if ok else "fail",
+                         f"contact-joint FE expected to follow '{expected}', follows '{followed}'"))
     for key, tab in tables_by_level.items():
         level, joints = key[:2]
         contact = len(key) == 3 and key[2] != joints
-        if contact and joints != followed:
-            continue  # contact FE vs the idealization it does not follow: informative only
+        if contact and joints != expected:
+            continue  # contact FE vs the idealization it is not expected to follow: informative only
         name = f"{level}/{joints}" + (" vs contact FE" if contact else "")
         limit = 100 * ERROR_THRESHOLDS[level]
         for k, v in average_row(tab).items():
