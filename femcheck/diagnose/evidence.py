@@ -9,8 +9,8 @@ returns
 * posterior probabilities over the explanations from the Schwarz (BIC) approximation of the evidence,
   ``-2 ln p(D | M) ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery 1995 §4.1.3), equal priors:
   ``P(M_i | D) = exp(-BIC_i / 2) / sum_j exp(-BIC_j / 2)``;
-* the ambiguity between the two leading explanations: they are called *not separable* when their
-  posterior ratio is below ``ambiguity_ratio`` (default 3, |Delta BIC| < 2.2: "not worth more than a
+* the ambiguity between the named explanation and its strongest rival that is neither a sub- nor a
+  superset of it: they are called *not separable* when their posterior ratio is below ``ambiguity_ratio`` (default 3, |Delta BIC| < 2.2: "not worth more than a
   bare mention" on Kass & Raftery's scale);
 * the verdict, exactly one of ``none`` | ``explained`` | ``unexplained``:
   ``none`` when the no-effect explanation leads and fits within noise (p >= ``alpha``), ``explained``
@@ -97,8 +97,12 @@ class Weighing:
                 for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
 
 
-def weigh(explanations, n_data: int, *, alpha: float = ALPHA, ambiguity_ratio: float = AMBIGUITY_RATIO) -> Weighing:
-    """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals."""
+def weigh(explanations, n_data: int, *, chosen=None, alpha: float = ALPHA,
+          ambiguity_ratio: float = AMBIGUITY_RATIO) -> Weighing:
+    """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals.
+
+    ``chosen``: the ids of the explanation the caller names (e.g. after a held-out check); default the
+    posterior leader. The verdict is the goodness of fit of the named explanation."""
     ex = list(explanations)
     nones = [e for e in ex if not e.ids]
     if not nones:
@@ -106,7 +110,14 @@ def weigh(explanations, n_data: int, *, alpha: float = ALPHA, ambiguity_ratio: f
     p = posterior(ex, n_data)
     order = np.argsort(-p, kind="stable")
     ex, p = [ex[i] for i in order], p[order]
-    best, none = ex[0], nones[0]
+    none = nones[0]
+    best = ex[0] if chosen is None else next((e for e in ex if set(e.ids) == set(chosen)), None)
+    if best is None:
+        raise ValueError(f"the chosen explanation {'+'.join(chosen) or 'none'} is not among the rivals")
+    if best is not ex[0]:   # the named explanation goes first, the others keep their posterior order
+        j = ex.index(best)
+        ex = [best] + ex[:j] + ex[j + 1:]
+        p = np.concatenate([[p[j]], p[:j], p[j + 1:]])
     dof_b, dof_n = n_data - best.n_params, n_data - none.n_params
     c_b, p_b = goodness(best.chi2, dof_b)
     c_n, p_n = goodness(none.chi2, dof_n)
@@ -118,7 +129,11 @@ def weigh(explanations, n_data: int, *, alpha: float = ALPHA, ambiguity_ratio: f
         verdict = "explained"
     excess_none = max(none.chi2 - dof_n, 1e-12)
     frac = float(np.clip(max(best.chi2 - max(dof_b, 1), 0.0) / excess_none, 0.0, 1.0))
-    ambiguous = len(ex) > 1 and p[1] > 0 and p[0] / p[1] < ambiguity_ratio
-    text = (f"{ex[0].name} {p[0]:.2f} vs {ex[1].name} {p[1]:.2f}: not separable with these measurements"
+    # ambiguity: the named explanation against its strongest *different* rival (neither contains the other:
+    # a nested rival only adds or drops a cause and shows up in that cause's marginal probability instead)
+    named = set(best.ids)
+    rival = next((j for j in range(1, len(ex)) if not (set(ex[j].ids) <= named or named <= set(ex[j].ids))), None)
+    ambiguous = rival is not None and p[rival] > 0 and p[0] / p[rival] < ambiguity_ratio
+    text = (f"{ex[0].name} {p[0]:.2f} vs {ex[rival].name} {p[rival]:.2f}: not separable with these measurements"
             if ambiguous else "")
     return Weighing(tuple(ex), tuple(map(float, p)), int(n_data), verdict, c_b, p_b, c_n, p_n, frac, bool(ambiguous), text)

@@ -230,12 +230,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     for ex in rivals:   # the greedy fit (joint, several starts) is at least as good as the warm-started rival
         if set(ex.ids) == set(greedy_ids) and ex.chi2 > cur_fit.chi2:
             rivals[rivals.index(ex)] = evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit)
-    w = evidence.weigh(rivals, 3 * readings.n_states)
-    lead = w.best.payload
-    if set(lead.ids) != set(greedy_ids):
-        log.info("evidence leader %s differs from greedy %s", w.best.name, "+".join(greedy_ids) or "none")
-        chosen, cur_fit = list(lead.effects), lead
-        cur_cv = cross_validate(model, readings, chosen, lead, folds) if chosen else cv_base
+    if not any(set(ex.ids) == set(greedy_ids) for ex in rivals):   # e.g. three effects named
+        rivals.append(evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit))
+    # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
+    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids)
     prob = {tuple(sorted(e.ids)): p for e, p in zip(w.explanations, w.probability)}
     p_lead = prob.get(tuple(sorted(cur_fit.ids)), 0.0)
     # marginal probability of each named cause: the sum over all explanations that contain it
