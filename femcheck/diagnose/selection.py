@@ -32,6 +32,9 @@ from femcheck.diagnose.fitting import FitResult, fit_effects
 
 log = logging.getLogger(__name__)
 
+#: |trial drift| / its standard error above which the readings drift with trial order (a finding)
+DRIFT_Z = 5.0
+
 
 @dataclasses.dataclass(frozen=True)
 class CrossValidation:
@@ -96,7 +99,48 @@ class Diagnosis:
                 "n_params": int(self.fit.n_params), "chi2_per_dof_none": w.chi2_per_dof_none,
                 "p_value_none": w.p_value_none, "chi2_share_by_point": share(np.asarray(r.point)),
                 "chi2_share_by_direction": share(np.asarray(r.direction)),
-                "chi2_share_by_phase": share(np.asarray(r.phase))}
+                "chi2_share_by_phase": share(np.asarray(r.phase)),
+                "trial_drift_m_per_trial": float(r.trial_drift_m), "trial_drift_z": self.drift_z,
+                "reading_quantum_m": float(r.quantum_m), "shape": self.residual_shape()}
+
+    def residual_shape(self) -> dict:
+        """What the remaining residual looks like. Along each loaded state's force direction u the residual
+        a = u.(measured - model) is fitted, weighted by sigma, as a = alpha |F| + beta: ``load_proportional``
+        when alpha / se(alpha) > 3, ``load_independent`` when beta / se(beta) > 3; ``hysteretic`` when the unload
+        readings' residual differs from the loading ones at the same load by > 3 standard errors;
+        ``drifting`` when the readings drift with trial order (|z| > DRIFT_Z). ``shape`` lists those that hold."""
+        r = self.readings
+        f = np.linalg.norm(r.force, axis=1)
+        ok = f > 0
+        u = r.force[ok] / f[ok, None]
+        a = np.einsum("ij,ij->i", r.disp[ok] - self.fit.predicted[ok], u)
+        sd = r.sigma[ok, 0]
+        A = np.column_stack([f[ok], np.ones(ok.sum())]) / sd[:, None]
+        out = {"load_proportional_z": 0.0, "load_independent_z": 0.0, "hysteresis_z": 0.0}
+        if ok.sum() >= 3:
+            coef, *_ = np.linalg.lstsq(A, a / sd, rcond=None)
+            cov = np.linalg.pinv(A.T @ A)
+            se = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+            out["load_proportional_z"], out["load_independent_z"] = float(coef[0] / se[0]), float(coef[1] / se[1])
+            out["load_proportional_m_per_N"], out["load_independent_m"] = float(coef[0]), float(coef[1])
+        unl = np.flatnonzero((r.phase == "unload") & (r.case_index >= 0) & (f > 0))
+        if unl.size:
+            pre = r.preload_state[r.case_index[unl]]
+            uu = r.force[unl] / f[unl, None]
+            h = np.einsum("ij,ij->i", (r.disp[unl] - self.fit.predicted[unl]) - (r.disp[pre] - self.fit.predicted[pre]), uu)
+            se_h = np.sqrt(r.sigma[unl, 0] ** 2 + r.sigma[pre, 0] ** 2)
+            out["hysteresis_z"] = float(h.mean() / (np.sqrt(np.sum(se_h ** 2)) / h.size))
+        shape = [n for n, k in (("load_proportional", "load_proportional_z"), ("load_independent", "load_independent_z"),
+                                ("hysteretic", "hysteresis_z")) if abs(out[k]) > 3.0]
+        if abs(self.drift_z) > DRIFT_Z:
+            shape.append("drifting_with_trial_order")
+        out["shape"] = shape or ["noise"]
+        return out
+
+    @property
+    def drift_z(self) -> float:
+        r = self.readings
+        return float(r.trial_drift_m / r.trial_drift_sigma_m) if r.trial_drift_sigma_m > 0 else 0.0
 
     @property
     def heldout_error_before(self) -> dict:
@@ -234,6 +278,22 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         rivals.append(evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit))
     # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
     w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids)
+    if greedy_ids and w.probability[0] < 0.01:
+        # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
+        lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
+        log.info("greedy %s has posterior %.3g; naming the evidence leader %s", "+".join(greedy_ids), w.probability[0],
+                 lead.name)
+        chosen, cur_fit = list(lead.payload.effects), lead.payload
+        cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
+        greedy_ids = tuple(e.id for e in chosen)
+        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids)
+    if w.verdict == "explained" and cur_fit.on_bound:
+        # a cause that needs a parameter on its bound stands in for something the vocabulary cannot express
+        w = dataclasses.replace(w, verdict="unexplained")
+    drift_z = readings.trial_drift_m / readings.trial_drift_sigma_m if readings.trial_drift_sigma_m > 0 else 0.0
+    if abs(drift_z) > DRIFT_Z:
+        # no effect of the vocabulary depends on trial order: a significant drift is unexplained by construction
+        w = dataclasses.replace(w, verdict="unexplained")
     prob = {tuple(sorted(e.ids)): p for e, p in zip(w.explanations, w.probability)}
     p_lead = prob.get(tuple(sorted(cur_fit.ids)), 0.0)
     # marginal probability of each named cause: the sum over all explanations that contain it

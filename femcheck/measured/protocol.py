@@ -12,10 +12,10 @@ averaged over the trials. ``unload`` readings (back to P_p, then to 0) reveal hy
 Uncertainty: a reading is the true displacement plus noise, quantized to a reading quantum q. q is the
 quantum *seen in the data* (:func:`reading_quantum`: the largest step of which every reading is a whole
 multiple), or the case's dial resolution when the readings show none. The reading noise is estimated from
-the trial scatter robustly against a trend over trial order: per reading state the successive differences
-of the readings in trial order, pooled as von Neumann's mean square successive difference,
-``sigma^2 = sum (x_{t+1} - x_t)^2 / (2 n_diff)`` (a linear drift of slope b adds only b^2 / 2, not the
-~b^2 n^2 / 12 it adds to the plain variance). The scatter of quantized readings already contains the
+the trial scatter robustly against a trend over trial order: with three or more trials per state, the
+residuals of a straight line over trial order fitted per state and axis, pooled over their n - 2 degrees
+of freedom (a linear drift or creep is removed exactly); with two, von Neumann's mean square successive
+difference ``sigma^2 = sum (x_{t+1} - x_t)^2 / (2 n_diff)``. The scatter of quantized readings already contains the
 quantization, so ``sigma_r^2 = max(sigma_scatter^2, q^2 / 12)`` (the floor applies when the readings
 repeat exactly). A state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two
 readings) sqrt(2) sigma_r / sqrt(n). The trend itself is kept as a finding: ``trial_drift_m`` is the pooled
@@ -133,13 +133,27 @@ def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple
     (module docstring): (variance m^2, number of differences, drift slope m / trial, its standard error)."""
     order = np.lexsort((trial, idx))
     i, t, x = idx[order], trial[order].astype(float), disp[order]
-    same = i[1:] == i[:-1]
-    d = (x[1:] - x[:-1])[same]
-    n_diff = int(d.shape[0]) * x.shape[1]
-    var = float(np.sum(d ** 2) / (2 * n_diff)) if n_diff else 0.0
-    # pooled slope over trial order: within-state centred trial number against centred reading
     m = int(i.max()) + 1 if i.size else 0
     cnt = np.bincount(i, minlength=m).astype(float)
+    if np.all(cnt[cnt > 0] >= 3) and np.any(cnt >= 3):
+        # three or more trials per state: residuals of a straight line over trial order per state, so any
+        # linear trend (drift, creep) is removed before the scatter is pooled (n - 2 dof per state)
+        S0, S1, S2 = cnt, np.bincount(i, t, minlength=m), np.bincount(i, t * t, minlength=m)
+        det = S0 * S2 - S1 ** 2
+        res2, n_diff = 0.0, int(np.sum(cnt[cnt > 0] - 2)) * x.shape[1]
+        for ax in range(x.shape[1]):
+            Sy, Sty = np.bincount(i, x[:, ax], minlength=m), np.bincount(i, t * x[:, ax], minlength=m)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                b = np.where(det > 0, (S0 * Sty - S1 * Sy) / det, 0.0)
+                a0 = np.where(cnt > 0, (Sy - b * S1) / np.maximum(cnt, 1), 0.0)
+            res2 += float(np.sum((x[:, ax] - a0[i] - b[i] * t) ** 2))
+        var = res2 / n_diff if n_diff else 0.0
+    else:
+        same = i[1:] == i[:-1]
+        d = (x[1:] - x[:-1])[same]
+        n_diff = int(d.shape[0]) * x.shape[1]
+        var = float(np.sum(d ** 2) / (2 * n_diff)) if n_diff else 0.0
+    # pooled slope over trial order: within-state centred trial number against centred reading
     tm = np.bincount(i, t, minlength=m) / np.maximum(cnt, 1)
     tc = t - tm[i]
     xm = np.zeros((m, x.shape[1]))
