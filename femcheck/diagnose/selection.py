@@ -277,7 +277,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     if not any(set(ex.ids) == set(greedy_ids) for ex in rivals):   # e.g. three effects named
         rivals.append(evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit))
     # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
-    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids)
+    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
     if greedy_ids and w.probability[0] < 0.01:
         # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
         lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
@@ -286,7 +286,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         chosen, cur_fit = list(lead.payload.effects), lead.payload
         cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
         greedy_ids = tuple(e.id for e in chosen)
-        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids)
+        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
     if w.verdict == "explained" and cur_fit.on_bound:
         # a cause that needs a parameter on its bound stands in for something the vocabulary cannot express
         w = dataclasses.replace(w, verdict="unexplained")

@@ -20,7 +20,8 @@ quantization, so ``sigma_r^2 = max(sigma_scatter^2, q^2 / 12)`` (the floor appli
 repeat exactly). A state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two
 readings) sqrt(2) sigma_r / sqrt(n). The trend itself is kept as a finding: ``trial_drift_m`` is the pooled
 least-squares slope of the readings over trial order (m per trial) and ``trial_drift_sigma_m`` its standard
-error.
+error. ``sigma_dof`` is the number of degrees of freedom of the scatter estimate (0 when the quantization
+floor sets sigma): a goodness-of-fit test against it is an F test (lack of fit against pure error).
 """
 from __future__ import annotations
 
@@ -77,6 +78,7 @@ class Readings:
     quantum_m: float = 0.0
     trial_drift_m: float = 0.0
     trial_drift_sigma_m: float = 0.0
+    sigma_dof: int = 0
 
     @property
     def n_states(self) -> int:
@@ -114,18 +116,25 @@ def resolve_poses(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | 
     return out
 
 
-def reading_quantum(disp: np.ndarray, rel_tol: float = 1e-6) -> float:
-    """The quantum q (m) of which every reading in ``disp`` is a whole multiple: the smallest positive step
-    between distinct reading values, accepted if all readings are multiples of it to ``rel_tol`` of q;
-    0.0 when the readings show no common quantum (or fewer than two distinct values)."""
-    v = np.unique(np.abs(np.asarray(disp, float).ravel()))
+def reading_quantum(disp: np.ndarray, floor_m: float = 1e-8) -> float:
+    """The quantum q (m) of which every reading in ``disp`` is a whole multiple: the greatest common divisor
+    (Euclid's algorithm with a tolerance of 1e-6 q) of the distinct reading magnitudes; 0.0 when it falls
+    below ``floor_m`` (continuous readings) or the readings have fewer than two distinct values."""
+    v = np.unique(np.round(np.abs(np.asarray(disp, float).ravel()), 12))
     v = v[v > 0]
     if v.size < 2:
         return 0.0
-    steps = np.diff(np.concatenate([[0.0], v]))
-    q = float(steps[steps > 1e-9 * v.max()].min())
-    k = v / q
-    return q if np.max(np.abs(k - np.round(k))) < max(rel_tol * k.max(), 1e-6) else 0.0
+    q = float(v[0])
+    for x in v[1:]:
+        a, b = float(x), q
+        while b > 1e-6 * max(q, floor_m) and b >= floor_m * 1e-3:
+            a, b = b, a % b
+            if abs(b - a) < 1e-6 * a:   # a remainder within tolerance of the divisor is zero
+                b = 0.0
+        q = a
+        if q < floor_m:
+            return 0.0
+    return q if np.max(np.abs(v / q - np.round(v / q))) < 1e-4 else 0.0
 
 
 def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple[float, int, float, float]:
@@ -159,12 +168,13 @@ def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple
     xm = np.zeros((m, x.shape[1]))
     np.add.at(xm, i, x)
     xc = x - xm[i] / np.maximum(cnt, 1)[i][:, None]
-    stt = float(np.sum(tc ** 2)) * x.shape[1]
+    # the drift of each reading along its own sign (a device creeping along the load), over the axes that read
+    # anything (an axis reading zero throughout a state carries no drift information)
+    live = np.abs(xm[i]) > 0
+    stt = float(np.sum(tc[:, None] ** 2 * live))
     if stt <= 0:
         return var, n_diff, 0.0, 0.0
-    # the drift of each reading axis along its own sign: a device creeping along the load (sign of the reading)
-    sgn = np.sign(xm[i] + 1e-300)
-    slope = float(np.sum(tc[:, None] * xc * sgn) / stt)
+    slope = float(np.sum(tc[:, None] * xc * np.sign(xm[i]) * live) / stt)
     return var, n_diff, slope, float(np.sqrt(max(var, 1e-300) / stt))
 
 
@@ -187,7 +197,7 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
     mean /= counts[:, None]
     q = reading_quantum(data.disp)
     quantum = q if 0.0 < q <= res * (1 + 1e-6) or res == 0.0 else res
-    pooled, _, drift, drift_sd = trial_scatter(idx, np.asarray(data.trial), data.disp)
+    pooled, n_scatter, drift, drift_sd = trial_scatter(idx, np.asarray(data.trial), data.disp)
     sigma_r = float(np.sqrt(max(pooled, quantum ** 2 / 12.0)))
     if sigma_r == 0.0:
         raise MeasuredDataError(data.source, None, None, "cannot estimate the reading uncertainty: a single trial and "
@@ -240,7 +250,7 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         test_N=np.array(c_pt, float), delta=np.array(c_delta).reshape(-1, 3), delta_sigma=np.array(c_dsig).reshape(-1, 3),
         preload_state=np.array(c_ps, int), total_state=np.array(c_ts, int),
         reading_sigma_m=sigma_r, resolution_m=res, quantum_m=float(quantum), trial_drift_m=drift,
-        trial_drift_sigma_m=drift_sd)
+        trial_drift_sigma_m=drift_sd, sigma_dof=int(n_scatter) if pooled >= quantum ** 2 / 12.0 else 0)
 
 
 @dataclasses.dataclass(frozen=True)
