@@ -13,6 +13,47 @@ from femcheck.cli import console
 from femcheck.cli._common import Joints, ModelLevel
 
 
+#: case kinds a diagnosis takes (the effect vocabulary is the 6-PSU device's)
+DIAGNOSE_KINDS = ("haptic_6psu",)
+
+
+def check_writable(path: str, option: str) -> None:
+    """Refuse an output path that cannot be written, before any work starts (one-line error, exit 2)."""
+    import os
+
+    from femcheck.errors import FemcheckError
+    p = Path(path)
+    if p.is_dir():
+        raise FemcheckError(f"{option} {path}: is a folder; expected a file path")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise FemcheckError(f"{option} {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise FemcheckError(f"{option} {path}: not writable")
+
+
+def case_kind(case) -> str:
+    import json as _json
+    return _json.loads(case.raw_json).get("meta", {}).get("kind", "haptic_6psu")
+
+
+def scale_warning(readings, predicted_states) -> str | None:
+    """Issue 16 item 4: a warning when the measured deflections are not on the scale the case predicts
+    (median ratio measured / model of the along-load deflection outside [1/3, 3]: another device or unit)."""
+    import numpy as np
+    u = readings.case_unit
+    dm = np.einsum("ij,ij->i", readings.delta, u)
+    dmod = np.einsum("ij,ij->i", predicted_states[readings.total_state] - predicted_states[readings.preload_state], u)
+    ok = np.abs(dmod) > 0
+    if not ok.any():
+        return None
+    ratio = float(np.median(dm[ok] / dmod[ok]))
+    if not 1 / 3 <= ratio <= 3:
+        return (f"the measured deflections are {ratio:.3g} x the case's prediction: the data may come from a "
+                f"different device, geometry or unit than the case describes")
+    return None
+
+
 def register(app: typer.Typer) -> None:
     @app.command("diagnose")
     def diagnose_cmd(
@@ -20,7 +61,7 @@ def register(app: typer.Typer) -> None:
         measured: str = typer.Argument(..., metavar="MEASURED.csv", help="measured-data CSV (docs/diagnose.md)"),
         model: ModelLevel = typer.Option(ModelLevel.detailed, "--model", help="analytical model to check"),
         joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's [model] joint_rotations"),
-        json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file"),
+        json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file ('-': stdout)"),
         report: str = typer.Option(None, "--report", help="write report.md, report.html and plots into this folder"),
         max_effects: int = typer.Option(2, "--max-effects", min=1, max=3, help="most effects greedy selection may name"),
     ):
@@ -30,14 +71,31 @@ def register(app: typer.Typer) -> None:
         from femcheck.measured import process, read_measured_csv
         from femcheck.report.atomic import refuse_input_overwrite, write_text_atomic
 
+        from femcheck.errors import FemcheckError
+
+        if report and Path(report).exists() and not Path(report).is_dir():
+            raise FemcheckError(f"--report {report}: is an existing file; expected a folder (new or existing)")
+        if json_out and json_out != "-":
+            check_writable(json_out, "--json")
+        if report:
+            check_writable(str(Path(report) / "report.md"), "--report") if Path(report).is_dir() else \
+                check_writable(str(Path(report)), "--report")
         case = load_case(case_path)
-        for out in (json_out,) + ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
+        if case_kind(case) not in DIAGNOSE_KINDS:
+            raise FemcheckError(f"{case_path}: case kind {case_kind(case)!r}; diagnose takes {', '.join(DIAGNOSE_KINDS)}")
+        for out in ((json_out,) if json_out != "-" else ()) + ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
                 refuse_input_overwrite(out, [case_path, measured])
         readings = process(read_measured_csv(measured), case)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         d = diagnose(m, readings, max_effects=max_effects)
+        warn = scale_warning(readings, d.base.predicted)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
+        if warn:
+            result["warnings"] = [warn] + result["warnings"]
+        if json_out == "-":
+            typer.echo(json.dumps(result, indent=2, default=float))
+            return
         if json_out:
             write_text_atomic(json_out, json.dumps(result, indent=2, default=float))
         if report:
@@ -46,11 +104,17 @@ def register(app: typer.Typer) -> None:
         con = console()
         con.print(f"[bold]{case.meta.name}[/] vs {measured}: model [bold]{d.model_name}[/]; "
                   f"{readings.n_cases} cases, reading uncertainty {readings.reading_sigma_m * 1e6:.2f} um")
+        res = result["residual"]
+        con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}, "
+                  f"sigma {res['sigma_m'] * 1e6:.2f} um, unexplained fraction {res['unexplained_fraction']:.2f}; "
+                  f"residual shape: {', '.join(res['shape']['shape'])})")
+        if d.weighing.ambiguous:
+            con.print(f"[yellow]ambiguous:[/] {d.weighing.ambiguity}")
         t = Table(title="named causes" if d.significant else "no significant cause (none)")
-        for h in ("cause", "location", "parameters (95 % interval)"):
+        for h in ("cause", "probability", "location", "parameters (95 % interval)"):
             t.add_column(h)
         for c in d.causes:
-            t.add_row(c.id, c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
+            t.add_row(c.id, f"{c.probability:.2f}", c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
                                                  for k, v in c.params.items()))
         con.print(t)
         e = Table(title="held-out mean relative error of the deflection (%)")
@@ -63,7 +127,7 @@ def register(app: typer.Typer) -> None:
         if d.baseline_error:
             e.add_row("seed 001 weight fit", *[f"{100 * d.baseline_error.get(k, float('nan')):.1f}" for k in keys])
         con.print(e)
-        for w in d.warnings:
+        for w in ([warn] if warn else []) + list(d.warnings):
             con.print(f"[yellow]warning:[/] {w}")
         if report:
             con.print(f"report: {Path(report) / 'report.html'}")

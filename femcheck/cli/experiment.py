@@ -36,6 +36,9 @@ def register(app: typer.Typer) -> None:
 
         if Path(out).resolve() == Path(truth).resolve():
             raise FemcheckError(f"--out and --truth are the same file: {out}")
+        from femcheck.cli.diagnose import check_writable
+        for p, opt in ((out, "--out"), (truth, "--truth")):
+            check_writable(p, opt)
         for p in (out, truth):
             refuse_input_overwrite(p, [case_path])
             if Path(p).exists() and not force:
