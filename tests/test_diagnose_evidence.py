@@ -38,7 +38,7 @@ def test_verdicts():
     assert none_fits.verdict == "none" and none_fits.best.ids == ()
     explained = weigh([Explanation((), 4000.0, 0), Explanation(("a",), 401.0, 1)], n)
     assert explained.verdict == "explained" and explained.best.ids == ("a",)
-    assert explained.unexplained_fraction == pytest.approx(2 / 3600, rel=1e-12)   # (401 - 399) / (4000 - 400)
+    assert explained.unexplained_fraction == 0.0 and none_fits.unexplained_fraction == 0.0   # within noise
     partial = weigh([Explanation((), 4000.0, 0), Explanation(("a",), 1200.0, 1)], n)
     assert partial.verdict == "unexplained" and partial.best.ids == ("a",)
     # excess over noise left: (1200 - 399) / (4000 - 400)

@@ -110,7 +110,8 @@ def register(app: typer.Typer) -> None:
                   f"residual shape: {', '.join(res['shape']['shape'])})")
         if d.weighing.ambiguous:
             con.print(f"[yellow]ambiguous:[/] {d.weighing.ambiguity}")
-        t = Table(title="named causes" if d.significant else "no significant cause (none)")
+        t = Table(title="no significant cause (none)" if not d.significant else
+                  "partial explanations (a significant residual remains)" if d.verdict == "unexplained" else "named causes")
         for h in ("cause", "probability", "location", "parameters (95 % interval)"):
             t.add_column(h)
         for c in d.causes:

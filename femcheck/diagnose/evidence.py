@@ -18,7 +18,8 @@ returns
   when another explanation leads and fits within noise, ``unexplained`` when the leading explanation
   still leaves a significant residual (p < ``alpha``);
 * ``unexplained_fraction``: the share of the excess chi^2 over noise of the no-effect model that the
-  leading explanation leaves, ``max(chi2_best - dof_best, 0) / max(chi2_none - dof_none, eps)`` in [0, 1].
+  leading explanation leaves, ``max(chi2_best - dof_best, 0) / max(chi2_none - dof_none, eps)`` in [0, 1],
+  and 0 when the named explanation fits within noise.
 
 A future serial-robot diagnosis uses it with its own residual model (issue 23): only chi^2, N and k enter.
 """
@@ -138,7 +139,8 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     else:
         verdict = "explained"
     excess_none = max(none.chi2 - dof_n, 1e-12)
-    frac = float(np.clip(max(best.chi2 - max(dof_b, 1), 0.0) / excess_none, 0.0, 1.0))
+    # a residual within noise leaves nothing unexplained (the none model's excess is then noise itself)
+    frac = 0.0 if p_b >= alpha else float(np.clip(max(best.chi2 - max(dof_b, 1), 0.0) / excess_none, 0.0, 1.0))
     # ambiguity: the named explanation against its strongest *different* rival (neither contains the other:
     # a nested rival only adds or drops a cause and shows up in that cause's marginal probability instead)
     named = set(best.ids)
