@@ -25,7 +25,9 @@ def test_diagnose_json_and_report(data, capsys):
     j = json.loads(out.read_text())
     assert [c["id"] for c in j["causes"]] == ["actuation_compliance"] and j["significant"] is True
     c = j["causes"][0]
-    assert set(c) == {"id", "location", "params", "params_ci"}
+    assert set(c) == {"id", "probability", "location", "params", "params_ci", "on_bound"}
+    assert j["verdict"] == "explained" and 0.5 < c["probability"] <= 1.0
+    assert set(j["residual"]) >= {"chi2_per_dof", "p_value", "sigma_m", "unexplained_fraction"}
     assert c["params_ci"]["scale"][0] < 2.5 < c["params_ci"]["scale"][1]
     for key in ("heldout_error_before", "heldout_error_after"):
         assert set(j[key]) == {"x", "y", "z", "overall"}
@@ -51,3 +53,37 @@ def test_diagnose_refuses_to_write_over_its_input(data, capsys):
     _, csv = data
     assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--json", str(csv)]) == 2
     assert "input file" in capsys.readouterr().err
+
+
+def test_diagnose_json_to_stdout(data, capsys):
+    d, csv = data
+    assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--json", "-"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["verdict"] in ("none", "explained", "unexplained") and "residual" in j
+
+
+@pytest.mark.parametrize("extra, culprit", [
+    (["--report", "cases/haptic_6psu.toml"], "--report"),            # an existing file, not a folder
+    (["--json", "cases/haptic_6psu.toml/out.json"], "--json"),        # its folder is a file (missing folders are created)
+    (["--json", "cases"], "--json"),                                    # a folder, not a file
+])
+def test_diagnose_bad_output_paths_exit_2_before_work(data, capsys, extra, culprit):
+    d, csv = data
+    assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), *extra]) == 2
+    err = capsys.readouterr().err
+    assert culprit in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("kind_case", ["cases/irb120.toml", "cases/hiss.toml"])
+def test_diagnose_wrong_case_kind_names_the_kinds_it_takes(data, capsys, kind_case):
+    d, csv = data
+    assert main(["diagnose", kind_case, str(csv)]) == 2
+    err = capsys.readouterr().err
+    assert "haptic_6psu" in err and "Traceback" not in err
+
+
+def test_simulate_unwritable_output_exit_2(tmp_path, capsys):
+    assert main(["experiment", "simulate", "cases/haptic_6psu.toml", "--out", "cases/haptic_6psu.toml/m.csv",
+                 "--truth", str(tmp_path / "t.json")]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "Traceback" not in err and not (tmp_path / "t.json").exists()

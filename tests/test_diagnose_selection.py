@@ -10,7 +10,7 @@ import pytest
 import femcheck
 from femcheck.diagnose import AnalyticalChainModel, diagnose, residuals
 from femcheck.diagnose.effects import VOCABULARY
-from femcheck.diagnose.hidden_effects import confusion_markdown, run_case, run_matrix
+from femcheck.bench.hidden_effects import confusion_markdown, run_case, run_matrix
 from femcheck.experiment.simulate import simulate
 from femcheck.measured import process
 

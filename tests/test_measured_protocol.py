@@ -32,11 +32,34 @@ def test_uncertainty_pools_trial_scatter_and_resolution(case):
     rows = ("P0,+x,1,preload,5,5,0,0,0.09,0,0\nP0,+x,1,total,20,20,0,0,0.36,0,0\n"
             "P0,+x,2,preload,5,5,0,0,0.11,0,0\nP0,+x,2,total,20,20,0,0,0.36,0,0\n")
     r = process(parse_measured_csv(HEADER + rows), case)
-    res = case.measurement.dial_resolution_m
-    # pooled variance: only dx of the preload state scatters (0.09, 0.11 mm): s^2 = 2e-10 m^2 over 6 dof
-    pooled = 2e-10 / 6
-    assert r.reading_sigma_m == pytest.approx(np.sqrt(pooled + res ** 2 / 12), rel=1e-9)   # float rounding
+    # the readings are whole multiples of 0.01 mm: that is the quantum seen in the data
+    assert r.quantum_m == pytest.approx(1e-5, rel=1e-6)   # float gcd tolerance
+    # two trials: mean square successive difference, only dx of the preload state moves (0.02 mm) over
+    # 2 states x 3 axes: s^2 = (2e-5)^2 / (2 * 6); above the quantization floor q^2 / 12
+    assert r.reading_sigma_m == pytest.approx(np.sqrt(4e-10 / 12), rel=1e-9)   # float rounding
+    assert r.sigma_dof == 6
     np.testing.assert_allclose(r.delta_sigma[0], np.sqrt(2) * r.reading_sigma_m / np.sqrt(2), rtol=1e-12)
+
+
+def test_quantum_seen_in_the_data_sets_the_floor(case):
+    """Readings that repeat exactly leave only the quantization: sigma = q / sqrt(12), q from the data (1 um),
+    not the case's 10 um dial."""
+    rows = "".join(f"P0,+x,{t},preload,5,5,0,0,0.091,0,0\nP0,+x,{t},total,20,20,0,0,0.356,0,0\n" for t in (1, 2, 3))
+    r = process(parse_measured_csv(HEADER + rows), case)
+    assert r.quantum_m == pytest.approx(1e-6, rel=1e-6)   # float gcd tolerance
+    assert r.reading_sigma_m == pytest.approx(1e-6 / np.sqrt(12), rel=1e-9) and r.sigma_dof == 0
+
+
+def test_trial_drift_is_a_finding_not_noise(case):
+    """A reading creeping 0.02 mm per trial: the detrended scatter stays at the quantization floor and the
+    drift (m / trial) is reported with a large z."""
+    rows = "".join(f"P0,+x,{t},preload,5,5,0,0,{0.09 + 0.02 * t:.2f},0,0\nP0,+x,{t},total,20,20,0,0,"
+                   f"{0.36 + 0.02 * t:.2f},0,0\nP1,+x,{t},preload,5,5,0,0,{0.08 + 0.02 * t:.2f},0,0\n"
+                   f"P1,+x,{t},total,20,20,0,0,{0.30 + 0.02 * t:.2f},0,0\n" for t in (1, 2, 3, 4))
+    r = process(parse_measured_csv(HEADER + rows), case)
+    assert r.reading_sigma_m == pytest.approx(1e-5 / np.sqrt(12), rel=1e-6)   # exact line: only the floor remains
+    assert r.trial_drift_m == pytest.approx(2e-5, rel=1e-6)   # 0.02 mm per trial, float rounding
+    assert r.trial_drift_m / r.trial_drift_sigma_m > 5
 
 
 def test_missing_total_names_row_and_column(case):

@@ -57,11 +57,18 @@ def register(app: typer.Typer) -> None:
         con = console()
         con.print(f"[bold]{case.meta.name}[/] vs {measured}: model [bold]{d.model_name}[/]; "
                   f"{readings.n_cases} cases, reading uncertainty {readings.reading_sigma_m * 1e6:.2f} um")
-        t = Table(title="named causes" if d.significant else "no significant cause (none)")
-        for h in ("cause", "location", "parameters (95 % interval)"):
+        res = result["residual"]
+        con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}, "
+                  f"sigma {res['sigma_m'] * 1e6:.2f} um, unexplained fraction {res['unexplained_fraction']:.2f}; "
+                  f"residual shape: {', '.join(res['shape']['shape'])})")
+        if d.weighing.ambiguous:
+            con.print(f"[yellow]ambiguous:[/] {d.weighing.ambiguity}")
+        t = Table(title="no significant cause (none)" if not d.significant else
+                  "partial explanations (a significant residual remains)" if d.verdict == "unexplained" else "named causes")
+        for h in ("cause", "probability", "location", "parameters (95 % interval)"):
             t.add_column(h)
         for c in d.causes:
-            t.add_row(c.id, c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
+            t.add_row(c.id, f"{c.probability:.2f}", c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
                                                  for k, v in c.params.items()))
         con.print(t)
         e = Table(title="held-out mean relative error of the deflection (%)")

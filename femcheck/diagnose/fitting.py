@@ -46,6 +46,7 @@ class FitResult:
     warnings: tuple[str, ...]
     predicted: np.ndarray
     nfev: int = 0
+    on_bound: tuple[str, ...] = ()
 
     @property
     def bic(self) -> float:
@@ -157,8 +158,12 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
             if abs(c) > _CORR_LIMIT:
                 warnings.append(f"{names[a]} and {names[b]} are nearly collinear (corr {c:+.3f}): the data "
                                 f"pin down a combination, not each")
+    on_bound = tuple(names[j] for j in range(k) if not free[j])
+    for n in on_bound:
+        # a parameter pinned to its bound is not a finding: the effect stands in for something it cannot express
+        warnings.append(f"{n} sits on its bound: a symptom of a missing explanation, not a finding")
     pred = predict_readings(model, readings, effects, _split(vals, effects))
     for w in warnings:
         log.info("fit %s: %s", "+".join(e.id for e in effects), w)
     return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
-                     chi2, n_data, k, tuple(warnings), pred, nfev)
+                     chi2, n_data, k, tuple(warnings), pred, nfev, on_bound)

@@ -26,11 +26,14 @@ import logging
 
 import numpy as np
 
-from femcheck.diagnose import residuals
+from femcheck.diagnose import evidence, residuals
 from femcheck.diagnose.effects import effects as effect_registry
 from femcheck.diagnose.fitting import FitResult, fit_effects
 
 log = logging.getLogger(__name__)
+
+#: |trial drift| / its standard error above which the readings drift with trial order (a finding)
+DRIFT_Z = 5.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,8 +55,12 @@ class Cause:
     params: dict
     params_ci: dict
 
+    probability: float = 1.0
+    on_bound: tuple[str, ...] = ()
+
     def as_dict(self) -> dict:
-        return {"id": self.id, "location": self.location, "params": self.params, "params_ci": self.params_ci}
+        return {"id": self.id, "probability": self.probability, "location": self.location, "params": self.params,
+                "params_ci": self.params_ci, "on_bound": list(self.on_bound)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,6 +81,66 @@ class Diagnosis:
     noise_threshold: float
     baseline_error: dict | None = None
     readings: object = dataclasses.field(default=None, repr=False)
+    weighing: object = dataclasses.field(default=None, repr=False)
+
+    @property
+    def verdict(self) -> str:
+        return self.weighing.verdict
+
+    def residual_json(self) -> dict:
+        """Goodness of fit of the leading explanation and where its residual sits (chi^2 share per point,
+        per signed direction, and per phase of the load sweep)."""
+        w, r = self.weighing, self.readings
+        z2 = (((self.fit.predicted - r.disp) / r.sigma) ** 2).sum(axis=1)
+        tot = max(float(z2.sum()), 1e-300)
+        share = lambda keys: {str(k): float(z2[keys == k].sum() / tot) for k in dict.fromkeys(keys.tolist())}
+        return {"chi2_per_dof": w.chi2_per_dof, "p_value": w.p_value, "sigma_m": float(r.reading_sigma_m),
+                "unexplained_fraction": w.unexplained_fraction, "chi2": float(self.fit.chi2), "n_data": w.n_data,
+                "n_params": int(self.fit.n_params), "chi2_per_dof_none": w.chi2_per_dof_none,
+                "p_value_none": w.p_value_none, "chi2_share_by_point": share(np.asarray(r.point)),
+                "chi2_share_by_direction": share(np.asarray(r.direction)),
+                "chi2_share_by_phase": share(np.asarray(r.phase)),
+                "trial_drift_m_per_trial": float(r.trial_drift_m), "trial_drift_z": self.drift_z,
+                "reading_quantum_m": float(r.quantum_m), "shape": self.residual_shape()}
+
+    def residual_shape(self) -> dict:
+        """What the remaining residual looks like. Along each loaded state's force direction u the residual
+        a = u.(measured - model) is fitted, weighted by sigma, as a = alpha |F| + beta: ``load_proportional``
+        when alpha / se(alpha) > 3, ``load_independent`` when beta / se(beta) > 3; ``hysteretic`` when the unload
+        readings' residual differs from the loading ones at the same load by > 3 standard errors;
+        ``drifting`` when the readings drift with trial order (|z| > DRIFT_Z). ``shape`` lists those that hold."""
+        r = self.readings
+        f = np.linalg.norm(r.force, axis=1)
+        ok = f > 0
+        u = r.force[ok] / f[ok, None]
+        a = np.einsum("ij,ij->i", r.disp[ok] - self.fit.predicted[ok], u)
+        sd = r.sigma[ok, 0]
+        A = np.column_stack([f[ok], np.ones(ok.sum())]) / sd[:, None]
+        out = {"load_proportional_z": 0.0, "load_independent_z": 0.0, "hysteresis_z": 0.0}
+        if ok.sum() >= 3:
+            coef, *_ = np.linalg.lstsq(A, a / sd, rcond=None)
+            cov = np.linalg.pinv(A.T @ A)
+            se = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+            out["load_proportional_z"], out["load_independent_z"] = float(coef[0] / se[0]), float(coef[1] / se[1])
+            out["load_proportional_m_per_N"], out["load_independent_m"] = float(coef[0]), float(coef[1])
+        unl = np.flatnonzero((r.phase == "unload") & (r.case_index >= 0) & (f > 0))
+        if unl.size:
+            pre = r.preload_state[r.case_index[unl]]
+            uu = r.force[unl] / f[unl, None]
+            h = np.einsum("ij,ij->i", (r.disp[unl] - self.fit.predicted[unl]) - (r.disp[pre] - self.fit.predicted[pre]), uu)
+            se_h = np.sqrt(r.sigma[unl, 0] ** 2 + r.sigma[pre, 0] ** 2)
+            out["hysteresis_z"] = float(h.mean() / (np.sqrt(np.sum(se_h ** 2)) / h.size))
+        shape = [n for n, k in (("load_proportional", "load_proportional_z"), ("load_independent", "load_independent_z"),
+                                ("hysteretic", "hysteresis_z")) if abs(out[k]) > 3.0]
+        if abs(self.drift_z) > DRIFT_Z:
+            shape.append("drifting_with_trial_order")
+        out["shape"] = shape or ["noise"]
+        return out
+
+    @property
+    def drift_z(self) -> float:
+        r = self.readings
+        return float(r.trial_drift_m / r.trial_drift_sigma_m) if r.trial_drift_sigma_m > 0 else 0.0
 
     @property
     def heldout_error_before(self) -> dict:
@@ -87,8 +154,12 @@ class Diagnosis:
         return residuals.mean_by_direction(self.readings, residuals.case_errors(self.readings, cv.delta)["vector"])
 
     def as_json(self) -> dict:
-        return {"model": self.model_name,
+        w = self.weighing
+        return {"model": self.model_name, "verdict": w.verdict,
                 "causes": [c.as_dict() for c in self.causes],
+                "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
+                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N, equal priors over none, singles and pairs",
+                "residual": self.residual_json(),
                 "heldout_error_before": self.cv_before.error, "heldout_error_after": self.cv_after.error,
                 "heldout_error_along_load_before": self.cv_before.error_along,
                 "heldout_error_along_load_after": self.cv_after.error_along,
@@ -125,8 +196,29 @@ def cross_validate(model, readings, effects, full: FitResult, folds) -> CrossVal
                            error_along=residuals.mean_by_axis(readings, err["along"]))
 
 
+def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True) -> list:
+    """Every rival explanation: none, each single effect of ``pool`` and (``pairs``) each pair, as
+    :class:`~femcheck.diagnose.evidence.Explanation` with the :class:`FitResult` as payload. Pairs start from the
+    two singles' fitted values (one start, at most 100 evaluations)."""
+    out = [evidence.Explanation((), base.chi2, 0, base)]
+    singles = {}
+    for eff in pool:
+        f = fit_effects(model, readings, [eff])
+        singles[eff.id] = f
+        out.append(evidence.Explanation(f.ids, f.chi2, f.n_params, f))
+    if pairs:
+        for i, first in enumerate(pool):
+            for second in pool[i + 1:]:
+                # order the pair by the singles' fit: the better single first
+                a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
+                start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
+                f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100)
+                out.append(evidence.Explanation(f.ids, f.chi2, f.n_params, f))
+    return out
+
+
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
-             bic_margin: float = 10.0, with_baseline: bool = True) -> Diagnosis:
+             bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring)."""
     if readings.n_cases == 0 or len(set(readings.case_point)) < 2:
         from femcheck.errors import MeasuredDataError
@@ -176,10 +268,42 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         log.info("selected %s lowers the held-out chi^2 but not the held-out relative error: answer none",
                  "+".join(e.id for e in chosen))
         chosen, cur_fit, cur_cv = [], base, cv_base
+    # issue 15: weigh every rival (none, singles, pairs up to max_effects) by BIC evidence; the leader is the answer
+    rivals = fit_rivals(model, readings, pool, base, pairs=max_effects >= 2 and rivals_pairs)
+    greedy_ids = tuple(e.id for e in chosen)
+    for ex in rivals:   # the greedy fit (joint, several starts) is at least as good as the warm-started rival
+        if set(ex.ids) == set(greedy_ids) and ex.chi2 > cur_fit.chi2:
+            rivals[rivals.index(ex)] = evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit)
+    if not any(set(ex.ids) == set(greedy_ids) for ex in rivals):   # e.g. three effects named
+        rivals.append(evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit))
+    # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
+    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
+    if greedy_ids and w.probability[0] < 0.01:
+        # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
+        lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
+        log.info("greedy %s has posterior %.3g; naming the evidence leader %s", "+".join(greedy_ids), w.probability[0],
+                 lead.name)
+        chosen, cur_fit = list(lead.payload.effects), lead.payload
+        cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
+        greedy_ids = tuple(e.id for e in chosen)
+        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
+    if w.verdict == "explained" and cur_fit.on_bound:
+        # a cause that needs a parameter on its bound stands in for something the vocabulary cannot express
+        w = dataclasses.replace(w, verdict="unexplained")
+    drift_z = readings.trial_drift_m / readings.trial_drift_sigma_m if readings.trial_drift_sigma_m > 0 else 0.0
+    if abs(drift_z) > DRIFT_Z:
+        # no effect of the vocabulary depends on trial order: a significant drift is unexplained by construction
+        w = dataclasses.replace(w, verdict="unexplained")
+    prob = {tuple(sorted(e.ids)): p for e, p in zip(w.explanations, w.probability)}
+    p_lead = prob.get(tuple(sorted(cur_fit.ids)), 0.0)
+    # marginal probability of each named cause: the sum over all explanations that contain it
+    marg = {e.id: float(sum(p for ids, p in prob.items() if e.id in ids)) for e in chosen}
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
-                         params=cur_fit.params(i), params_ci=cur_fit.params_ci(i)) for i, e in enumerate(chosen))
+                         params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
+                         on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")))
+                   for i, e in enumerate(chosen))
     if not causes:
-        causes = (Cause(id="none", location="", params={}, params_ci={}),)
+        causes = (Cause(id="none", location="", params={}, params_ci={}, probability=float(p_lead)),)
     base_err = None
     if with_baseline:
         from femcheck.diagnose.baseline import baseline
@@ -191,4 +315,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     return Diagnosis(model_name=model.name, causes=causes, significant=bool(chosen), base=base, fit=cur_fit,
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
-                     readings=readings)
+                     readings=readings, weighing=w)

@@ -9,11 +9,19 @@ then the total P_p + P_T and delta_t read. The deflection due to the test load a
 averaged over the trials. ``unload`` readings (back to P_p, then to 0) reveal hysteresis; an optional
 ``sweep`` staircase (5..30 N at P0) identifies the preload (:func:`identify_preload`, seed 000 Fig. 8).
 
-Uncertainty: a reading is the true displacement plus noise, quantized to the dial resolution r. The
-reading noise is estimated by pooling the trial scatter of all reading states and adding the
-quantization variance r^2/12 (conservative: the scatter of quantized readings already contains part of
-it); a state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two readings)
-sqrt(2) sigma_r / sqrt(n).
+Uncertainty: a reading is the true displacement plus noise, quantized to a reading quantum q. q is the
+quantum *seen in the data* (:func:`reading_quantum`: the largest step of which every reading is a whole
+multiple), or the case's dial resolution when the readings show none. The reading noise is estimated from
+the trial scatter robustly against a trend over trial order: with three or more trials per state, the
+residuals of a straight line over trial order fitted per state and axis, pooled over their n - 2 degrees
+of freedom (a linear drift or creep is removed exactly); with two, von Neumann's mean square successive
+difference ``sigma^2 = sum (x_{t+1} - x_t)^2 / (2 n_diff)``. The scatter of quantized readings already contains the
+quantization, so ``sigma_r^2 = max(sigma_scatter^2, q^2 / 12)`` (the floor applies when the readings
+repeat exactly). A state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two
+readings) sqrt(2) sigma_r / sqrt(n). The trend itself is kept as a finding: ``trial_drift_m`` is the pooled
+least-squares slope of the readings over trial order (m per trial) and ``trial_drift_sigma_m`` its standard
+error. ``sigma_dof`` is the number of degrees of freedom of the scatter estimate (0 when the quantization
+floor sets sigma): a goodness-of-fit test against it is an F test (lack of fit against pure error).
 """
 from __future__ import annotations
 
@@ -67,6 +75,10 @@ class Readings:
     total_state: np.ndarray
     reading_sigma_m: float
     resolution_m: float
+    quantum_m: float = 0.0
+    trial_drift_m: float = 0.0
+    trial_drift_sigma_m: float = 0.0
+    sigma_dof: int = 0
 
     @property
     def n_states(self) -> int:
@@ -104,6 +116,68 @@ def resolve_poses(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | 
     return out
 
 
+def reading_quantum(disp: np.ndarray, floor_m: float = 1e-8) -> float:
+    """The quantum q (m) of which every reading in ``disp`` is a whole multiple: the greatest common divisor
+    (Euclid's algorithm with a tolerance of 1e-6 q) of the distinct reading magnitudes; 0.0 when it falls
+    below ``floor_m`` (continuous readings) or the readings have fewer than two distinct values."""
+    v = np.unique(np.round(np.abs(np.asarray(disp, float).ravel()), 12))
+    v = v[v > 0]
+    if v.size < 2:
+        return 0.0
+    q = float(v[0])
+    for x in v[1:]:
+        a, b = float(x), q
+        while b > 1e-6 * max(q, floor_m) and b >= floor_m * 1e-3:
+            a, b = b, a % b
+            if abs(b - a) < 1e-6 * a:   # a remainder within tolerance of the divisor is zero
+                b = 0.0
+        q = a
+        if q < floor_m:
+            return 0.0
+    return q if np.max(np.abs(v / q - np.round(v / q))) < 1e-4 else 0.0
+
+
+def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple[float, int, float, float]:
+    """Robust pooled reading variance over states ``idx`` (r,) from successive differences in ``trial`` order
+    (module docstring): (variance m^2, number of differences, drift slope m / trial, its standard error)."""
+    order = np.lexsort((trial, idx))
+    i, t, x = idx[order], trial[order].astype(float), disp[order]
+    m = int(i.max()) + 1 if i.size else 0
+    cnt = np.bincount(i, minlength=m).astype(float)
+    if np.all(cnt[cnt > 0] >= 3) and np.any(cnt >= 3):
+        # three or more trials per state: residuals of a straight line over trial order per state, so any
+        # linear trend (drift, creep) is removed before the scatter is pooled (n - 2 dof per state)
+        S0, S1, S2 = cnt, np.bincount(i, t, minlength=m), np.bincount(i, t * t, minlength=m)
+        det = S0 * S2 - S1 ** 2
+        res2, n_diff = 0.0, int(np.sum(cnt[cnt > 0] - 2)) * x.shape[1]
+        for ax in range(x.shape[1]):
+            Sy, Sty = np.bincount(i, x[:, ax], minlength=m), np.bincount(i, t * x[:, ax], minlength=m)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                b = np.where(det > 0, (S0 * Sty - S1 * Sy) / det, 0.0)
+                a0 = np.where(cnt > 0, (Sy - b * S1) / np.maximum(cnt, 1), 0.0)
+            res2 += float(np.sum((x[:, ax] - a0[i] - b[i] * t) ** 2))
+        var = res2 / n_diff if n_diff else 0.0
+    else:
+        same = i[1:] == i[:-1]
+        d = (x[1:] - x[:-1])[same]
+        n_diff = int(d.shape[0]) * x.shape[1]
+        var = float(np.sum(d ** 2) / (2 * n_diff)) if n_diff else 0.0
+    # pooled slope over trial order: within-state centred trial number against centred reading
+    tm = np.bincount(i, t, minlength=m) / np.maximum(cnt, 1)
+    tc = t - tm[i]
+    xm = np.zeros((m, x.shape[1]))
+    np.add.at(xm, i, x)
+    xc = x - xm[i] / np.maximum(cnt, 1)[i][:, None]
+    # the drift of each reading along its own sign (a device creeping along the load), over the axes that read
+    # anything (an axis reading zero throughout a state carries no drift information)
+    live = np.abs(xm[i]) > 0
+    stt = float(np.sum(tc[:, None] ** 2 * live))
+    if stt <= 0:
+        return var, n_diff, 0.0, 0.0
+    slope = float(np.sum(tc[:, None] * xc * np.sign(xm[i]) * live) / stt)
+    return var, n_diff, slope, float(np.sqrt(max(var, 1e-300) / stt))
+
+
 def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None = None) -> Readings:
     """Average trials, apply eq. 1 per trial and estimate uncertainties (see module docstring)."""
     poses = resolve_poses(data, case, pose_table)
@@ -121,14 +195,10 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
     mean = np.zeros((m, 3))
     np.add.at(mean, idx, data.disp)
     mean /= counts[:, None]
-    dev2 = np.zeros((m, 3))
-    np.add.at(dev2, idx, (data.disp - mean[idx]) ** 2)
-    multi = counts > 1
-    if multi.any():
-        pooled = dev2[multi].sum() / (3 * (counts[multi] - 1).sum())   # pooled variance of one reading
-    else:
-        pooled = 0.0
-    sigma_r = float(np.sqrt(pooled + res ** 2 / 12.0))
+    q = reading_quantum(data.disp)
+    quantum = q if 0.0 < q <= res * (1 + 1e-6) or res == 0.0 else res
+    pooled, n_scatter, drift, drift_sd = trial_scatter(idx, np.asarray(data.trial), data.disp)
+    sigma_r = float(np.sqrt(max(pooled, quantum ** 2 / 12.0)))
     if sigma_r == 0.0:
         raise MeasuredDataError(data.source, None, None, "cannot estimate the reading uncertainty: a single trial and "
                                 "zero dial resolution")
@@ -179,7 +249,8 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         case_unit=np.array(c_unit).reshape(-1, 3), case_pose=np.array(c_pose).reshape(-1, 6), preload_N=np.array(c_pp, float),
         test_N=np.array(c_pt, float), delta=np.array(c_delta).reshape(-1, 3), delta_sigma=np.array(c_dsig).reshape(-1, 3),
         preload_state=np.array(c_ps, int), total_state=np.array(c_ts, int),
-        reading_sigma_m=sigma_r, resolution_m=res)
+        reading_sigma_m=sigma_r, resolution_m=res, quantum_m=float(quantum), trial_drift_m=drift,
+        trial_drift_sigma_m=drift_sd, sigma_dof=int(n_scatter) if pooled >= quantum ** 2 / 12.0 else 0)
 
 
 @dataclasses.dataclass(frozen=True)

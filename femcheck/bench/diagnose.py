@@ -1,0 +1,60 @@
+"""Bench area ``diagnose``: speed of a diagnosis with every candidate pair, and the verdict rates on data
+inside and outside the fitted family (issue 15 items 5, 7).
+
+Figures:
+
+* ``diagnose_9pt_all_pairs_s``: wall time of one diagnosis of a 9-point, 6-direction dataset (preload
+  sweep, 3 trials) with none, every single effect and every pair weighed (analytical detailed model);
+* ``foreign_unexplained_rate``: share of out-of-vocabulary datasets (:mod:`femcheck.experiment.foreign`,
+  4 effects x ``SEEDS`` seeds, magnitude 0.1) that get the verdict ``unexplained``;
+* ``same_model_named_right_rate``: share of in-vocabulary single-effect datasets (every effect, random
+  magnitude and place, ``SEEDS`` seeds) whose first named cause is the hidden one;
+* ``same_model_unexplained_rate``: share of those that get ``unexplained`` (false alarms);
+* ``noise_6um_unexplained_rate``: the same single-effect sets with twice the case's noise.
+"""
+from __future__ import annotations
+
+import time
+
+import femcheck
+
+AREA = "diagnose"
+SEEDS = 1
+DIRS = ("+x", "+y", "+z")
+
+
+def run() -> dict:
+    from femcheck.diagnose import AnalyticalChainModel, diagnose
+    from femcheck.diagnose.effects import VOCABULARY
+    from femcheck.experiment.foreign import FOREIGN, simulate_foreign
+    from femcheck.experiment.simulate import simulate
+    from femcheck.measured import process
+
+    case = femcheck.load_case("cases/haptic_6psu.toml")
+    model = AnalyticalChainModel(case, "detailed", "rigid")
+    r = process(simulate(case, [("actuation_compliance", {"scale": 1.8})], seed=1).data, case)
+    t0 = time.perf_counter()
+    diagnose(model, r, with_baseline=False)
+    t_all = time.perf_counter() - t0
+    out = {"diagnose_9pt_all_pairs_s": round(t_all, 2)}
+    verdicts = []
+    for fid in FOREIGN:
+        for s in range(SEEDS):
+            rr = process(simulate_foreign(case, fid, 0.1, seed=100 + s, directions=DIRS).data, case)
+            verdicts.append(diagnose(model, rr, with_baseline=False).verdict)
+    out["foreign_unexplained_rate"] = round(sum(v == "unexplained" for v in verdicts) / len(verdicts), 3)
+    for label, sigma in (("same_model", None), ("noise_6um", 6e-6)):
+        right, unexpl, n = 0, 0, 0
+        for eid in VOCABULARY:
+            if eid == "none":
+                continue
+            for s in range(SEEDS):
+                rr = process(simulate(case, [(eid, {})], seed=200 + s, directions=DIRS, noise_sigma_m=sigma).data, case)
+                d = diagnose(model, rr, with_baseline=False)
+                right += d.causes[0].id == eid
+                unexpl += d.verdict == "unexplained"
+                n += 1
+        if label == "same_model":
+            out["same_model_named_right_rate"] = round(right / n, 3)
+        out[f"{label}_unexplained_rate"] = round(unexpl / n, 3)
+    return out

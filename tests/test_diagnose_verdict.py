@@ -1,0 +1,77 @@
+"""Verdicts on data the vocabulary can and cannot express (issue 15 items 1, 5, 6).
+
+Out-of-vocabulary effects come from :mod:`femcheck.experiment.foreign` (base rocking, trial creep, load
+softening, dial shear): the diagnosis must say ``unexplained``. In-vocabulary data keep their names.
+"""
+import numpy as np
+import pytest
+
+import femcheck
+from femcheck.diagnose import AnalyticalChainModel, diagnose
+from femcheck.experiment.foreign import FOREIGN, simulate_foreign
+from femcheck.experiment.simulate import simulate
+from femcheck.measured import process
+
+FAST = ("+x", "+y", "+z")
+#: a few candidates keep the default suite fast; the bench runs the whole vocabulary
+FEW = ("actuation_compliance", "link_modulus", "leg_softening", "sensor_misalignment")
+
+
+@pytest.fixture(scope="module")
+def case():
+    return femcheck.load_case("cases/haptic_6psu.toml")
+
+
+@pytest.fixture(scope="module")
+def model(case):
+    return AnalyticalChainModel(case, "detailed", "rigid")
+
+
+def _json(model, r, candidates=FEW):
+    return diagnose(model, r, candidates=candidates, with_baseline=False).as_json()
+
+
+def test_json_contract_and_explained_verdict(case, model):
+    r = process(simulate(case, [("actuation_compliance", {"scale": 2.0})], seed=21, directions=FAST).data, case)
+    j = _json(model, r)
+    assert j["verdict"] == "explained"
+    assert j["causes"][0]["id"] == "actuation_compliance"
+    for k in ("id", "probability", "params", "params_ci"):
+        assert k in j["causes"][0]
+    assert j["causes"][0]["probability"] > 0.9
+    for k in ("chi2_per_dof", "p_value", "sigma_m", "unexplained_fraction"):
+        assert k in j["residual"]
+    assert "heldout_error_before" in j and "heldout_error_after" in j and isinstance(j["alternatives"], list)
+    # sigma from the data: 3 um noise quantized to 10 um gives a reading sigma of a few um
+    assert 2e-6 < j["residual"]["sigma_m"] < 6e-6
+
+
+def test_clean_data_is_none(case, model):
+    r = process(simulate(case, [], seed=22, directions=FAST).data, case)
+    j = _json(model, r)
+    assert j["verdict"] == "none" and j["causes"][0]["id"] == "none"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("foreign", FOREIGN)
+def test_out_of_vocabulary_effect_is_unexplained(case, model, foreign):
+    r = process(simulate_foreign(case, foreign, 0.1, seed=5, directions=FAST).data, case)
+    j = diagnose(model, r, with_baseline=False).as_json()
+    assert j["verdict"] == "unexplained", (foreign, j["causes"], j["residual"]["chi2_per_dof"])
+
+
+def test_load_softening_is_unexplained_and_load_shaped(case, model):
+    r = process(simulate_foreign(case, "load_softening", 0.1, seed=6, directions=FAST).data, case)
+    j = _json(model, r)
+    assert j["verdict"] == "unexplained"
+    assert j["residual"]["chi2_per_dof"] > 2.0
+    assert "load_proportional" in j["residual"]["shape"]["shape"]
+
+
+def test_trial_creep_is_a_drift_finding(case, model):
+    r = process(simulate_foreign(case, "trial_creep", 0.05, seed=7, directions=FAST).data, case)
+    j = _json(model, r)
+    assert j["verdict"] == "unexplained"
+    assert "drifting_with_trial_order" in j["residual"]["shape"]["shape"]
+    # the creep does not inflate sigma: still the few-um reading noise
+    assert j["residual"]["sigma_m"] < 6e-6
