@@ -20,11 +20,21 @@ def at_test_points(hiss):
     return legs, *leg_jacobians(legs)
 
 
-def test_geometry_closes_and_follows_seed_eq1(hiss, at_test_points):
+def test_leg_chains_close_in_the_plane_of_their_passive_axes(hiss, at_test_points):
     legs, _, _ = at_test_points
     g = hiss.rcube
-    # eq. 1 r_i = S + l1 sin(phi_i1); the legs close with the seed's link lengths (round-off only)
-    np.testing.assert_allclose(legs.P, g.S + g.l1 * np.sin(hiss.test_point_angles_rad), atol=1e-14)
+    E = np.eye(3)
+    for i in range(3):
+        # closure computed through the chain, not through eq. 1: the passive axes of leg i are parallel to e_i,
+        # so the crank tip B, the knee C and the platform point P must share one plane normal to e_i
+        np.testing.assert_allclose((legs.P - legs.B[i]) @ E[i], 0.0, atol=1e-14)   # round-off of metre sums
+        np.testing.assert_allclose((legs.C[i] - legs.B[i]) @ E[i], 0.0, atol=1e-14)
+        # the knee angle as the signed angle between the link vectors about the passive axis (atan2, not the
+        # law of cosines the pose solver uses) equals the stored one
+        u, v = legs.C[i] - legs.B[i], legs.P - legs.C[i]
+        signed = np.arctan2(np.einsum("mk,mk->m", np.cross(u, v), legs.passive_axis[i]), np.einsum("mk,mk->m", u, v))
+        np.testing.assert_allclose(signed, legs.knee_rad[i], atol=1e-12)  # atan2 vs arccos round-off
+    # the legs close with the seed's link lengths (round-off only)
     np.testing.assert_allclose(np.linalg.norm(legs.B - legs.A, axis=-1), g.l1, atol=1e-14)
     np.testing.assert_allclose(np.linalg.norm(legs.C - legs.B, axis=-1), g.l2, atol=1e-14)
     np.testing.assert_allclose(np.linalg.norm(legs.P[None] - legs.C, axis=-1), g.l3, atol=1e-14)
