@@ -21,7 +21,8 @@ def data_csv(tmp_path_factory):
     p = case.identification
     rng = np.random.default_rng(21)
     qid = np.array(p.configurations_deg, dtype=float)
-    qver = rng.uniform(-90, 90, (5, case.n_joints))          # verification poses (own choice, seeded)
+    # verification: seed 002 Table I configurations 9-13 from the case, plus 3 random poses (own choice, seeded)
+    qver = np.vstack([np.array(p.verification_configurations_deg), rng.uniform(-90, 90, (3, case.n_joints))])
     qdeg = np.vstack([np.repeat(qid, len(p.wrenches), 0), np.repeat(qver, len(p.wrenches), 0)])
     W = np.tile(np.array(p.wrenches), (len(qid) + len(qver), 1))
     dX = deflect(model, np.deg2rad(qdeg), W, complementary=False).twist[:, :3]
@@ -51,7 +52,7 @@ def test_extended_identify_recovers_the_model_that_made_the_data(data_csv, tmp_p
     # noise-free data from the same model: only round-off amplified by cond(A) remains
     np.testing.assert_allclose(res["compliances"], c_true, rtol=1e-6)
     assert res["error_identification_pct"]["max"] < 1e-6 and res["error_verification_pct"]["max"] < 1e-6
-    assert len(res["kappa_inv"]) == 13 and all(0 < x <= 1 for x in res["kappa_inv"])
+    assert len(res["kappa_inv"]) == 16 and all(0 < x <= 1 for x in res["kappa_inv"])
 
 
 def test_conventional_model_cannot_explain_extended_data(data_csv):

@@ -16,10 +16,8 @@ import typer
 
 from femcheck.case import load_case
 from femcheck.errors import FemcheckError
-
 from femcheck.report.atomic import write_text_atomic
 from femcheck.vjm.extended_vjm import identification_matrix, identify_compliances, virtual_jacobian
-
 
 
 class IdentifyDataError(FemcheckError, ValueError):
