@@ -71,3 +71,15 @@ def test_bad_csv_is_a_one_line_error(tmp_path, capsys):
     assert main(["identify", "cases/cobot7.toml", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "expected header columns" in err and len(err.strip().splitlines()) == 1
+
+
+def test_make_data_round_trips_and_never_overwrites(tmp_path, capsys):
+    path = tmp_path / "d.csv"
+    assert main(["identify", "cases/cobot7.toml", str(path), "--make-data"]) == 0
+    assert len(path.read_text().splitlines()) == 1 + 26            # seed 002: 13 configurations x 2 wrenches
+    r = _run("cases/cobot7.toml", path, "--json", "-")
+    res = json.loads(r.output)
+    c_true = 1.0 / np.array(load_case("cases/cobot7.toml").vjm().k_theta)
+    np.testing.assert_allclose(res["compliances"], c_true, rtol=1e-6)  # noise-free, round-off x cond(A)
+    assert main(["identify", "cases/cobot7.toml", str(path), "--make-data"]) == 2
+    assert "never overwrites" in capsys.readouterr().err

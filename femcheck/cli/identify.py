@@ -49,6 +49,29 @@ def read_data(path: str, n: int):
     return sets, np.deg2rad(num[:, :n]), num[:, n:n + 6], num[:, n + 6:]
 
 
+def make_data(case, path: str, noise_rel: float = 0.0, seed: int = 0) -> int:
+    """Write DATA.csv from the case's own VJM (identification plan + verification set, every wrench at every
+    configuration), optional Gaussian noise of ``noise_rel`` times each deflection's norm. Returns the rows."""
+    from femcheck.vjm.serial_vjm import deflect
+    p = case.identification
+    if p is None:
+        raise IdentifyDataError(f"{case.source}: [identification] is required to make data")
+    qid, qver = np.array(p.configurations_deg, float), np.array(p.verification_configurations_deg, float).reshape(-1, case.n_joints)
+    nw = len(p.wrenches)
+    qdeg = np.vstack([np.repeat(qid, nw, 0), np.repeat(qver, nw, 0)])
+    W = np.tile(np.array(p.wrenches), (len(qid) + len(qver), 1))
+    dX = deflect(case.vjm(), np.deg2rad(qdeg), W, complementary=False).twist[:, :3]
+    rng = np.random.default_rng(seed)
+    dX = dX + noise_rel * np.linalg.norm(dX, axis=1, keepdims=True) * rng.standard_normal(dX.shape) / np.sqrt(3)
+    n = case.n_joints
+    lines = [",".join(["set"] + [f"q{j + 1}" for j in range(n)] + ["fx", "fy", "fz", "mx", "my", "mz", "dx", "dy", "dz"])]
+    for i in range(len(qdeg)):
+        tag = "identification" if i < len(qid) * nw else "verification"
+        lines.append(",".join([tag] + [repr(float(v)) for v in (*qdeg[i], *W[i], *dX[i])]))
+    write_text_atomic(path, "\n".join(lines) + "\n")
+    return len(qdeg)
+
+
 def _errors(A, c, dX):
     pred = (A @ c).reshape(-1, 3)
     e = 100 * np.linalg.norm(pred - dX, axis=1) / np.linalg.norm(dX, axis=1)
@@ -62,9 +85,17 @@ def register(app: typer.Typer) -> None:
         data_path: str = typer.Argument(..., metavar="DATA.csv", help="measurements (format in the module doc / docs/vjm.md)"),
         model: VJMModel = typer.Option(VJMModel.extended, "--model", help="conventional (torsion only) or extended (3 springs per joint)"),
         json_out: str = typer.Option(None, "--json", help="write the result as JSON to OUT ('-' = stdout)"),
+        make: bool = typer.Option(False, "--make-data", help="write DATA.csv from the case's own model (plan + verification set) and stop"),
+        noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors."""
         case = load_case(case_path)
+        if make:
+            import os
+            if os.path.exists(data_path):
+                raise IdentifyDataError(f"{data_path}: exists; --make-data never overwrites a file")
+            typer.echo(f"wrote {make_data(case, data_path, noise)} rows to {data_path}")
+            return
         vjm = case.vjm()
         ext = model is VJMModel.extended
         sets, q, W, dX = read_data(data_path, case.n_joints)
@@ -99,4 +130,5 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"{model.value}: cond(A) {out['cond_A']:.3g}, torsion share {100 * out['torsion_share']:.1f} %, "
                        f"error identification {out['error_identification_pct']['mean']:.2f} % mean / "
                        f"{out['error_identification_pct']['max']:.2f} % max, verification "
-                       f"{out['error_verification_pct']['mean']} % mean")
+                       + (f"{out['error_verification_pct']['mean']:.2f} % mean / {out['error_verification_pct']['max']:.2f} % max"
+                          if out['error_verification_pct']['mean'] is not None else "none"))
