@@ -132,3 +132,39 @@ def test_fine_tuning_recovers_a_linear_distortion():
     y = a * x + b + rng.normal(size=x.shape) * 1e-4
     ft = fine_tune(x, y)
     assert np.all(ft.rms_after <= ft.rms_before + 1e-18)
+
+
+# seed 001 Table 2, D/F fit, W1..W11
+TABLE2_DF = np.array([0.884, 0.038, 0.941, 0.991, 0.866, 0.258, 0.977, 0.978, 0.054, 0.020, 0.125])
+
+
+def _deflection_mm_under_1kg_negative_diagonal(hiss):
+    from femcheck.vjm.rcube_geometry import rcube_stiffness
+    K = scaled_stiffness(hiss.K_theta, TABLE2_DF, hiss.fitting.weight_map)
+    P = forward_position(hiss.rcube, hiss.test_point_angles_rad)
+    _, Kp = rcube_stiffness(hiss.rcube, K, P)
+    F = np.array([-1.0, -1.0, -1.0, 0, 0, 0]) / np.sqrt(3) * 9.81    # 1 kg along the negative diagonal (sec. 4)
+    d = np.linalg.solve(Kp, np.broadcast_to(F, (len(P), 6))[..., None])[..., 0]
+    return 1e3 * np.linalg.norm(d[:, :3], axis=1)
+
+
+def test_table2_df_weights_make_tp3_the_most_compliant_point(hiss):
+    d = _deflection_mm_under_1kg_negative_diagonal(hiss)
+    # seed 001 sec. 5: TP3 is the most compliant test point (exact argmax; margin today 25.71 vs 25.62 mm)
+    assert int(np.argmax(d)) == 2
+
+
+@pytest.mark.xfail(strict=True, reason="assumed R-CUBE layout (h = 130 mm, 50 mm cube) gives knees -21..-152 deg, "
+                   "not the seed's -38..-147 deg; the layout inference of issue 21 item 4 is not done")
+def test_knee_angles_lie_in_the_seed_range(hiss, at_test_points):
+    legs, _, _ = at_test_points
+    k = np.rad2deg(legs.knee_rad)
+    # seed 001 sec. 2.1 reports -147 ... -38 deg over the TPs; 5 deg = reading the range off the paper
+    assert k.min() >= -147 - 5 and k.max() <= -38 + 5
+
+
+@pytest.mark.xfail(strict=True, reason="assumed layout with Table 2 D/F weights deflects 11-26 mm under 1 kg; "
+                   "the seed measured at most about 6 mm; layout inference not done")
+def test_deflection_with_paper_weights_has_the_measured_order(hiss):
+    # seed 001 sec. 4: measured deflections are a few mm; 10 mm allows the order, not the value
+    assert _deflection_mm_under_1kg_negative_diagonal(hiss).max() <= 10.0
