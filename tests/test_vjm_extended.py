@@ -101,3 +101,5 @@ def test_intersecting_axes_without_tilt_offsets_are_not_identifiable():
     sv = np.linalg.svd(A, compute_uv=False)
     # 3 intersecting pairs x 2 dependencies (shared axis + same projector onto the perpendicular plane)
     assert int(np.sum(sv > sv[0] * 1e-10)) == 21 - 6
+
+

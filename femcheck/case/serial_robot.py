@@ -139,8 +139,8 @@ class Identification:
     configurations_deg: tuple[tuple[float, ...], ...] = quantity("deg", check="any")
     wrenches: tuple[tuple[float, float, float, float, float, float], ...] = quantity("N, N m", check="any")
     rows: Literal["translation", "full"] = option("translation", doc="measured components")
-    verification_configurations_deg: tuple[tuple[float, ...], ...] | None = quantity(
-        "deg", check="any", default=None, doc="configurations held out to verify the identified model (seed 002 Table I, 9-13)")
+    verification_configurations_deg: tuple[tuple[float, ...], ...] = quantity(
+        "deg", check="any", default=(), doc="configurations that check the identified model (seed 002 Table I 9-13)")
 
 
 @dataclass(frozen=True)
@@ -206,7 +206,7 @@ def build(raw: dict, path) -> SerialRobotCase:
     if "identification" in raw:
         ident = build_section(ctx, "identification", Identification, raw["identification"])
         for key in ("configurations_deg", "verification_configurations_deg"):
-            for i, q in enumerate(getattr(ident, key) or ()):
+            for i, q in enumerate(getattr(ident, key)):
                 if len(q) != len(joints):
                     raise ctx.error(f"identification.{key}[{i}]", f"has {len(q)} angles; expected {len(joints)}")
     return SerialRobotCase(meta=meta, model=model, kinematics=kin, joints=joints, identification=ident)

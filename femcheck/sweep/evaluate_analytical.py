@@ -153,14 +153,7 @@ def run_analytical_task(task: AnalyticalTask) -> dict[str, np.ndarray]:
         log.info("%d of %d samples not evaluated (marked ok = False), e.g. sample %d: %s",
                     len(failures), k, failures[0][0], failures[0][1])
 
-    out = {"sample_id": np.repeat(task.sample_ids.astype(np.int64), n_pts),
-           "sample_key": np.repeat(np.asarray(task.sample_keys, dtype=object), n_pts),
-           "point": np.tile(np.asarray(task.points, dtype=object), k)}
-    for j, key in enumerate(task.keys):
-        out[f"p:{key}"] = np.repeat(task.values[:, j], n_pts)
-    out.update(table)
-    out["ok"] = ok
-    return out
+    return task.result_rows(task.points, table, ok)
 
 
 def _fill(table, ok, case_g, task, rows, P, array_cols, failures):

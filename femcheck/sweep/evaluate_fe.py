@@ -159,12 +159,4 @@ def run_fe_task(task: FETask) -> dict[str, np.ndarray]:
         ok[rows] = True
         log.debug("FE sample %d: %.1f s (%s)", sid, fe.timings_s["wall"], fe.timings_s)
 
-    out = {"sample_id": np.repeat(task.sample_ids.astype(np.int64), n_pts),
-           "sample_key": np.repeat(np.asarray(task.sample_keys, dtype=object), n_pts),
-           "point": np.tile(np.asarray(task.points, dtype=object), k)}
-    for j, key in enumerate(task.keys):
-        out[f"p:{key}"] = np.repeat(task.values[:, j], n_pts)
-    out.update(table)
-    out["ok"] = ok
-    out["failure"] = failure
-    return out
+    return task.result_rows(task.points, table, ok, failure=failure)

@@ -22,3 +22,17 @@ class SampleChunk:
     @property
     def n_samples(self) -> int:
         return int(self.values.shape[0])
+
+    def result_rows(self, points, columns: dict, ok: np.ndarray, **extra) -> dict:
+        """The chunk's result columns (k samples x n points, sample-major): sample id and key, point, the swept
+        parameter values (``p:KEY``), the model's ``columns``, ``ok`` and any ``extra`` columns."""
+        k, n_pts = self.n_samples, len(points)
+        out = {"sample_id": np.repeat(self.sample_ids.astype(np.int64), n_pts),
+               "sample_key": np.repeat(np.asarray(self.sample_keys, dtype=object), n_pts),
+               "point": np.tile(np.asarray(points, dtype=object), k)}
+        for j, key in enumerate(self.keys):
+            out[f"p:{key}"] = np.repeat(self.values[:, j], n_pts)
+        out.update(columns)
+        out["ok"] = ok
+        out.update(extra)
+        return out

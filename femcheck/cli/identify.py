@@ -1,0 +1,135 @@
+"""``femcheck identify``: joint compliances of a serial robot from measured tool deflections (seed 002 eqs. 9-12).
+
+DATA.csv: header ``set,q1..qn,fx,fy,fz,mx,my,mz,dx,dy,dz``; ``set`` is ``identification`` or ``verification``;
+q in deg, wrench in N and N m at the tool point (base frame), deflection in m. Partial: no confidence
+intervals beyond the classical LS standard error (1.96 s), kappa_inv uses the
+configuration's own rows (3 per wrench), which is an assumed reading of seed 002's per-configuration index.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from enum import Enum
+
+import numpy as np
+import typer
+
+from femcheck.case import load_case
+from femcheck.errors import FemcheckError
+from femcheck.report.atomic import write_text_atomic
+from femcheck.vjm.extended_vjm import identification_matrix, identify_compliances, virtual_jacobian
+
+
+class IdentifyDataError(FemcheckError, ValueError):
+    """DATA.csv of `femcheck identify` is malformed (message names the file and what was expected)."""
+
+
+class VJMModel(str, Enum):
+    conventional = "conventional"
+    extended = "extended"
+
+
+def read_data(path: str, n: int):
+    """(set (m,), q (m, n) rad, W (m, 6), dX (m, 3) m) from DATA.csv; errors name the file and row."""
+    cols = ["set"] + [f"q{j + 1}" for j in range(n)] + ["fx", "fy", "fz", "mx", "my", "mz", "dx", "dy", "dz"]
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except OSError as e:
+        raise IdentifyDataError(f"{path}: cannot read ({e.strerror})") from None
+    if not rows or any(c not in rows[0] for c in cols):
+        raise IdentifyDataError(f"{path}: expected header columns {','.join(cols)}")
+    try:
+        num = np.array([[float(r[c]) for c in cols[1:]] for r in rows])
+    except ValueError as e:
+        raise IdentifyDataError(f"{path}: non-numeric value ({e})") from None
+    sets = np.array([r["set"] for r in rows])
+    if not np.isin(sets, ["identification", "verification"]).all():
+        raise IdentifyDataError(f"{path}: column set must be 'identification' or 'verification'")
+    return sets, np.deg2rad(num[:, :n]), num[:, n:n + 6], num[:, n + 6:]
+
+
+def make_data(case, path: str, noise_rel: float = 0.0, seed: int = 0) -> int:
+    """Write DATA.csv from the case's own VJM (identification plan + verification set, every wrench at every
+    configuration), optional Gaussian noise of ``noise_rel`` times each deflection's norm. Returns the rows."""
+    from femcheck.vjm.serial_vjm import deflect
+    p = case.identification
+    if p is None:
+        raise IdentifyDataError(f"{case.source}: [identification] is required to make data")
+    qid, qver = np.array(p.configurations_deg, float), np.array(p.verification_configurations_deg, float).reshape(-1, case.n_joints)
+    nw = len(p.wrenches)
+    qdeg = np.vstack([np.repeat(qid, nw, 0), np.repeat(qver, nw, 0)])
+    W = np.tile(np.array(p.wrenches), (len(qid) + len(qver), 1))
+    dX = deflect(case.vjm(), np.deg2rad(qdeg), W, complementary=False).twist[:, :3]
+    rng = np.random.default_rng(seed)
+    dX = dX + noise_rel * np.linalg.norm(dX, axis=1, keepdims=True) * rng.standard_normal(dX.shape) / np.sqrt(3)
+    n = case.n_joints
+    lines = [",".join(["set"] + [f"q{j + 1}" for j in range(n)] + ["fx", "fy", "fz", "mx", "my", "mz", "dx", "dy", "dz"])]
+    for i in range(len(qdeg)):
+        tag = "identification" if i < len(qid) * nw else "verification"
+        lines.append(",".join([tag] + [repr(float(v)) for v in (*qdeg[i], *W[i], *dX[i])]))
+    write_text_atomic(path, "\n".join(lines) + "\n")
+    return len(qdeg)
+
+
+def _errors(A, c, dX):
+    pred = (A @ c).reshape(-1, 3)
+    e = 100 * np.linalg.norm(pred - dX, axis=1) / np.linalg.norm(dX, axis=1)
+    return {"mean": float(e.mean()), "max": float(e.max())} if len(e) else {"mean": None, "max": None}
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("identify")
+    def identify_cmd(
+        case_path: str = typer.Argument(..., metavar="CASE", help="serial-robot case file (TOML), e.g. cases/cobot7.toml"),
+        data_path: str = typer.Argument(..., metavar="DATA.csv", help="measurements (format in the module doc / docs/vjm.md)"),
+        model: VJMModel = typer.Option(VJMModel.extended, "--model", help="conventional (torsion only) or extended (3 springs per joint)"),
+        json_out: str = typer.Option(None, "--json", help="write the result as JSON to OUT ('-' = stdout)"),
+        make: bool = typer.Option(False, "--make-data", help="write DATA.csv from the case's own model (plan + verification set) and stop"),
+        noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection"),
+    ):
+        """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors."""
+        case = load_case(case_path)
+        if make:
+            import os
+            if os.path.exists(data_path):
+                raise IdentifyDataError(f"{data_path}: exists; --make-data never overwrites a file")
+            typer.echo(f"wrote {make_data(case, data_path, noise)} rows to {data_path}")
+            return
+        vjm = case.vjm()
+        ext = model is VJMModel.extended
+        sets, q, W, dX = read_data(data_path, case.n_joints)
+        J = virtual_jacobian(vjm.chain, q, ext, vjm.tilt_offset_m if ext else None)
+        ident = sets == "identification"
+        res = identify_compliances(J[ident], W[ident], dX[ident])
+        A = identification_matrix(J, W).reshape(len(q), 3, -1)
+        k = A.shape[2]
+        tors = slice(0, k, 3) if ext else slice(0, k)
+        dt = np.einsum("mrk,k->mr", A[:, :, tors], res.compliance[tors])
+        dall = np.einsum("mrk,k->mr", A, res.compliance)
+        # the projection of the torsion part on the total (femcheck/vjm/torsion_share.py): additive, torsion + tilt = 1
+        share = np.einsum("mr,mr->m", dt, dall) / np.einsum("mr,mr->m", dall, dall)
+        # kappa_inv per configuration (unique joint vector, in file order): sigma_min / sigma_max of that
+        # configuration's stacked rows of A (3 per wrench); sigma_min over the min(rows, k) singular values
+        _, first, inv = np.unique(np.round(q, 12), axis=0, return_index=True, return_inverse=True)
+        kinv = []
+        for g in np.argsort(first):
+            sv = np.linalg.svd(A[inv.ravel() == g].reshape(-1, k), compute_uv=False)
+            kinv.append(float(sv[-1] / sv[0]))
+        out = {"model": model.value, "compliances": res.compliance.tolist(),
+               "compliances_ci": (1.96 * res.standard_error).tolist(), "cond_A": res.condition_number,
+               "kappa_inv": kinv,
+               "torsion_share": float(share[ident].mean()),
+               "error_identification_pct": _errors(A[ident].reshape(-1, k), res.compliance, dX[ident]),
+               "error_verification_pct": _errors(A[~ident].reshape(-1, k), res.compliance, dX[~ident])}
+        text = json.dumps(out, indent=2)
+        if json_out == "-":
+            typer.echo(text)
+        else:
+            if json_out:
+                write_text_atomic(json_out, text)
+            typer.echo(f"{model.value}: cond(A) {out['cond_A']:.3g}, torsion share {100 * out['torsion_share']:.1f} %, "
+                       f"error identification {out['error_identification_pct']['mean']:.2f} % mean / "
+                       f"{out['error_identification_pct']['max']:.2f} % max, verification "
+                       + (f"{out['error_verification_pct']['mean']:.2f} % mean / {out['error_verification_pct']['max']:.2f} % max"
+                          if out['error_verification_pct']['mean'] is not None else "none"))
