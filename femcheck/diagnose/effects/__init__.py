@@ -24,6 +24,8 @@ class Param:
     log: bool = False
     typical: float = 1.0
     doc: str = ""
+    #: the value meaning "no effect" (e.g. a leg factor 1, a gap 0): sitting on a bound there is no symptom
+    neutral: float | None = None
 
     def to_x(self, v):
         return np.log10(v) if self.log else np.asarray(v) / self.typical
