@@ -64,3 +64,9 @@ def test_contact_fe_following_another_idealization_than_expected_fails():
     assert checks["contact FE follows the expected idealization"] == "fail"
     assert checks["threshold detailed/released vs contact FE +x"] == "fail"
     assert "threshold detailed/rigid vs contact FE +x" not in checks
+
+
+def test_the_verdict_leads_even_when_other_sections_ask_to_be_first():
+    from femcheck.verify.render import Section, ordered, verdict_section
+    secs = [Section("a"), Section("coverage", first=True), verdict_section([], [], 1.0), Section("b")]
+    assert [s.title for s in ordered(secs)] == ["Verdict", "coverage", "a", "b"]

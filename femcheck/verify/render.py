@@ -37,8 +37,14 @@ class Section:
     extra_rows: tuple = ()          # a second table under the first (e.g. the meshes of a convergence study)
 
 
+#: title of the section every report opens with
+VERDICT_TITLE = "Verdict"
+
+
 def ordered(sections: list[Section]) -> list[Section]:
-    return [s for s in sections if s.first] + [s for s in sections if not s.first]
+    """The verdict, then the ``first`` sections in the order they were added, then the rest."""
+    lead = [s for s in sections if s.title == VERDICT_TITLE]
+    return lead + [s for s in sections if s.first and s not in lead] + [s for s in sections if not s.first]
 
 
 def render_markdown(title: str, intro: str, sections: list[Section]) -> str:
@@ -85,7 +91,7 @@ def verdict_section(checks: list[Check], worst: list[dict], seconds: float) -> S
         head += " Worst mean analytical-FE errors: " + "; ".join(f"{w['table']} {w['direction']} {w['mean_error_pct']:.2f} %"
                                                                for w in worst) + "."
     rows = tuple({"check": c.name, "status": c.status, "detail": c.detail} for c in checks)
-    return Section("Verdict", rows, note=head, first=True)
+    return Section(VERDICT_TITLE, rows, note=head, first=True)
 
 
 def verdict_json(checks: list[Check], worst: list[dict], seconds: float) -> str:
