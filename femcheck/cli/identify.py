@@ -8,13 +8,12 @@ configuration's own rows (3 per wrench), which is an assumed reading of seed 002
 from __future__ import annotations
 
 import csv
-import json
 from enum import Enum
 
 import numpy as np
 import typer
 
-from femcheck.case import load_case
+from femcheck.cli._common import emit_json, load_case_for
 from femcheck.errors import FemcheckError
 from femcheck.report.atomic import write_text_atomic
 from femcheck.vjm.extended_vjm import identification_matrix, identify_compliances, virtual_jacobian
@@ -89,7 +88,7 @@ def register(app: typer.Typer) -> None:
         noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors."""
-        case = load_case(case_path)
+        case = load_case_for(case_path, "identify", kinds=("serial_robot",))
         if make:
             import os
             if os.path.exists(data_path):
@@ -122,12 +121,9 @@ def register(app: typer.Typer) -> None:
                "torsion_share": float(share[ident].mean()),
                "error_identification_pct": _errors(A[ident].reshape(-1, k), res.compliance, dX[ident]),
                "error_verification_pct": _errors(A[~ident].reshape(-1, k), res.compliance, dX[~ident])}
-        text = json.dumps(out, indent=2)
-        if json_out == "-":
-            typer.echo(text)
-        else:
-            if json_out:
-                write_text_atomic(json_out, text)
+        if json_out:
+            emit_json(out, json_out, inputs=[case_path, data_path])
+        if json_out != "-":
             typer.echo(f"{model.value}: cond(A) {out['cond_A']:.3g}, torsion share {100 * out['torsion_share']:.1f} %, "
                        f"error identification {out['error_identification_pct']['mean']:.2f} % mean / "
                        f"{out['error_identification_pct']['max']:.2f} % max, verification "
