@@ -88,7 +88,9 @@ def test_browser_probe_sees_a_broken_image_and_a_late_verdict(tmp_path):
     """The probe can fail: a PNG that does not decode and a verdict pushed below the fold are both caught."""
     filler = [Section(f"filler {k}", tuple({"a": i, "b": i * 2.0} for i in range(40))) for k in range(4)]
     bad = Section("broken image", images=(("x.png", b"not a png", "broken"),))
-    html_text = render_html("probe", "intro", [*filler, bad, Section("Verdict", note="FAIL: late")])
+    # render_html always puts the verdict first: push it below the fold by hand, as a broken renderer would
+    html_text = render_html("probe", "intro", [*filler, bad]).replace(
+        "</body>", '<h2>Verdict</h2><p class="note">FAIL: late</p></body>')
     out = _probe(html_text, tmp_path)
     assert out["broken"] == ["broken"]
     assert out["verdict_bottom"] > out["viewport"]

@@ -70,3 +70,5 @@ def test_the_verdict_leads_even_when_other_sections_ask_to_be_first():
     from femcheck.verify.render import Section, ordered, verdict_section
     secs = [Section("a"), Section("coverage", first=True), verdict_section([], [], 1.0), Section("b")]
     assert [s.title for s in ordered(secs)] == ["Verdict", "coverage", "a", "b"]
+    # a verdict not marked first still leads, once
+    assert [s.title for s in ordered([Section("a"), Section("Verdict")])] == ["Verdict", "a"]

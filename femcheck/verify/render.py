@@ -44,7 +44,8 @@ VERDICT_TITLE = "Verdict"
 def ordered(sections: list[Section]) -> list[Section]:
     """The verdict, then the ``first`` sections in the order they were added, then the rest."""
     lead = [s for s in sections if s.title == VERDICT_TITLE]
-    return lead + [s for s in sections if s.first and s not in lead] + [s for s in sections if not s.first]
+    rest = [s for s in sections if s.title != VERDICT_TITLE]
+    return lead + [s for s in rest if s.first] + [s for s in rest if not s.first]
 
 
 def render_markdown(title: str, intro: str, sections: list[Section]) -> str:
