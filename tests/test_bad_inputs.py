@@ -71,6 +71,16 @@ CASES = [
     ("diagnose_report_is_a_file", ["diagnose", "{d}/haptic_6psu.toml", "{d}/measured.csv", "--report", "{d}/existing_report"], 2, "--report", None),
     ("diagnose_missing_column", ["diagnose", "{d}/haptic_6psu.toml", "{d}/no_column.csv"], 2, "dz_mm", None),
     ("unknown_option", ["stiffness", "{d}/haptic_6psu.toml", "--nope"], 2, "--nope", None),
+    ("max_condition_nan", ["stiffness", "{d}/haptic_6psu.toml", "--max-condition", "nan"], 2, "--max-condition", None),
+    ("coverage_mutation_zero", ["coverage", "{d}/haptic_6psu.toml", "--mutation", "0", "--json", "{d}/c0.json"], 2,
+     "--mutation", "{d}/c0.json"),
+    ("coverage_bad_point", ["coverage", "{d}/haptic_6psu.toml", "--points", "P9", "--json", "{d}/c1.json"], 2,
+     "--points", "{d}/c1.json"),
+    ("coverage_bad_mesh", ["coverage", "{d}/haptic_6psu.toml", "--mesh", "medium"], 2, "--mesh", None),
+    ("coverage_of_serial_robot", ["coverage", "{d}/irb120.toml"], 2, "meta.kind", None),
+    ("coverage_json_unwritable", ["coverage", "{d}/haptic_6psu.toml", "--json", "{d}/a_file/c.json"], 2, "--json", None),
+    ("identify_of_6psu", ["identify", "{d}/haptic_6psu.toml", "{d}/measured.csv"], 2, "meta.kind", None),
+    ("unknown_linear_solver", ["--linear-solver", "bogus", "stiffness", "{d}/haptic_6psu.toml"], 2, "bogus", None),
 ]
 
 

@@ -4,9 +4,7 @@ The library logs; only the CLI prints.
 """
 from __future__ import annotations
 
-import importlib
 import logging
-import pkgutil
 import sys
 
 import typer
