@@ -8,6 +8,7 @@ TOML layout (SI; angles only in keys ending ``_deg``)::
     [[joints]]        one table per DH row: a_m, alpha_deg, d_m, theta_offset_deg, and either
                       stiffness_Nm_per_rad or one or more [[joints.drive_train]] components (motor -> output);
                       for the extended VJM tilt_stiffness_Nm_per_rad = [k_x, k_y] and tilt_offset_m
+    [gravity]         optional: vector_m_per_s2 (base frame) for the self-weight diagnosis (with joints' mass_kg, com_m)
     [identification]  optional: configurations_deg = [[q1..qn], ...], wrenches = [[fx..mz], ...], rows
 
 Drive-train components (seed 003 sec. 3), ``kind`` =
@@ -119,6 +120,8 @@ class Joint:
     tilt_stiffness_Nm_per_rad: tuple[float, float] | None = quantity("N m/rad", default=None,
                                                                      doc="extended VJM tilt springs about joint-frame x, y")
     tilt_offset_m: float = quantity("m", check="any", default=0.0, doc="tilt springs' place along the joint axis")
+    mass_kg: float = quantity("kg", check="nonnegative", default=0.0, doc="link mass (self-weight diagnosis)")
+    com_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0), doc="link centre of mass in the DH frame")
 
     def __post_init__(self):
         if (self.stiffness_Nm_per_rad is None) == (self.drive_train is None):
@@ -152,6 +155,7 @@ class SerialRobotCase(CaseRecord):
     kinematics: Kinematics
     joints: tuple[Joint, ...]
     identification: Identification | None = None
+    gravity_m_per_s2: tuple[float, float, float] = (0.0, 0.0, -9.81)
 
     kind = CASE_KIND
 
@@ -192,7 +196,7 @@ def build(raw: dict, path) -> SerialRobotCase:
     ctx = Context(path)
     parts = build_sections(ctx, raw,
                            {"meta": Meta, "model": ModelOptions, "kinematics": Kinematics},
-                           optional=("meta", "model"), also_allowed=("joints", "identification"))
+                           optional=("meta", "model"), also_allowed=("joints", "identification", "gravity"))
     meta, model, kin = parts["meta"], parts["model"], parts["kinematics"]
     rows = raw.get("joints")
     if not isinstance(rows, list) or not rows:
@@ -209,4 +213,7 @@ def build(raw: dict, path) -> SerialRobotCase:
             for i, q in enumerate(getattr(ident, key)):
                 if len(q) != len(joints):
                     raise ctx.error(f"identification.{key}[{i}]", f"has {len(q)} angles; expected {len(joints)}")
-    return SerialRobotCase(meta=meta, model=model, kinematics=kin, joints=joints, identification=ident)
+    from femcheck.case.serial_tree import Gravity
+    grav = build_section(ctx, "gravity", Gravity, raw.get("gravity", {}))
+    return SerialRobotCase(meta=meta, model=model, kinematics=kin, joints=joints, identification=ident,
+                           gravity_m_per_s2=grav.vector_m_per_s2)

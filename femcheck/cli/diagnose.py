@@ -22,6 +22,10 @@ def register(app: typer.Typer) -> None:
         json_out: str = typer.Option(None, "--json", help="write the diagnosis as JSON to this file ('-': standard output)"),
         report: str = typer.Option(None, "--report", help="write report.md, report.html and plots into this folder"),
         max_effects: int = typer.Option(2, "--max-effects", min=1, max=3, help="most effects greedy selection may name"),
+        sigma_mm: float = typer.Option(None, "--sigma-mm", help="serial robots: noise of one marker coordinate (1 sigma, mm); "
+                                       "default: the case's measurement.sigma_m, else repeated poses"),
+        folds: int = typer.Option(None, "--folds", min=2, help="serial robots: K of the K-fold cross-validation "
+                                  "(default: the case's measurement.folds; the CSV's fold column wins)"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -34,7 +38,9 @@ def register(app: typer.Typer) -> None:
             check_output_file(json_out, "--json")
         if report:
             check_output_dir(report, "--report")
-        case = load_case_for(case_path, "diagnose")
+        case = load_case_for(case_path, "diagnose", kinds=("haptic_6psu", "serial_tree", "serial_robot"))
+        if case.meta.kind in ("serial_tree", "serial_robot"):
+            return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds)
         for out in ((json_out,) if json_out != "-" else ()) + \
                 ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
@@ -85,3 +91,66 @@ def register(app: typer.Typer) -> None:
             con.print(f"[yellow]warning:[/] {w}")
         if report:
             con.print(f"report: {Path(report) / 'report.html'}")
+
+
+def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds) -> None:
+    """Self-weight diagnosis of a serial robot (a kinematic tree) from absolute marker positions (issue 23)."""
+    import math
+
+    from femcheck.cli import progress
+    from femcheck.cli._common import emit_json
+    from femcheck.errors import CaseError
+    from femcheck.robot.diagnosis import diagnose_tree
+    from femcheck.robot.positions import read_marker_csv
+    from femcheck.robot.serial_case import as_tree_case
+
+    if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
+        raise CaseError(case_path, "--sigma-mm", f"got {sigma_mm}; expected a positive number of mm")
+    case = as_tree_case(case)
+    tree = case.tree
+    data = read_marker_csv(measured, tree.marker_names, tree.n_joints)
+    if data.n_poses < 10:
+        from femcheck.errors import MeasuredDataError
+        raise MeasuredDataError(measured, None, "pose", f"{data.n_poses} poses; expected at least 10 for a diagnosis")
+    with progress("diagnose", None) as bar:
+        d = diagnose_tree(case, data, sigma_m=None if sigma_mm is None else sigma_mm * 1e-3, folds=folds,
+                          progress=lambda s: bar.update(description=s))
+    result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
+    if json_out:
+        emit_json(result, json_out, inputs=[case_path, measured])
+        if json_out == "-":
+            return
+    if report:
+        from femcheck.robot.report import write_report
+        write_report(d, case, measured, report)
+    con = console()
+    res = result["residual"]
+    con.print(f"[bold]{case.meta.name}[/] vs {measured}: {data.n_poses} poses, {data.n_readings} marker readings; "
+              f"sigma {res['sigma_m'] * 1e3:.3f} mm ({d.sigma_source})")
+    con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}; model as given "
+              f"{res['chi2_per_dof_none']:.2f}; unexplained fraction {res['unexplained_fraction']:.2f})")
+    if result["ambiguous"]:
+        con.print(f"[yellow]ambiguous:[/] {result['ambiguity']}")
+    t = Table(title="partial explanations (a significant residual remains)" if d.verdict == "unexplained" else
+              "named causes" if d.verdict == "explained" else "no significant cause (none)")
+    for h in ("cause", "probability", "where", "parameters (95 % interval)"):
+        t.add_column(h)
+    for c in result["causes"]:
+        t.add_row(c["id"], f"{c['probability']:.2f}", c["location"],
+                  "; ".join(f"{k} = {v:.4g} [{c['params_ci'][k][0]:.3g}, {c['params_ci'][k][1]:.3g}]" for k, v in c["params"].items()))
+    con.print(t)
+    e = Table(title=f"held-out marker error, mm ({result['heldout_folds']}-fold over poses)")
+    for h in ("model", "mean", "median", "max"):
+        e.add_column(h, justify="right")
+    e.add_row("as given", *(f"{result[f'heldout_{k}_error_mm_before']:.3f}" for k in ("mean", "median", "max")))
+    e.add_row("extended", *(f"{result[f'heldout_{k}_error_mm_after']:.3f}" for k in ("mean", "median", "max")))
+    for l in result["leave_one_out"]:
+        e.add_row(f"without {l['id']}", f"{l['heldout_mean_error_mm']:.3f}", "", f"{l['heldout_max_error_mm']:.3f}")
+    con.print(e)
+    idf = result["identifiability"]
+    con.print(f"nuisance: rank {idf['rank']}/{idf['n_params']}, condition {idf['condition_number']:.3g}, "
+              f"{len(idf['fixed'])} fixed at nominal")
+    for w in result["not_applicable"] + result["warnings"]:
+        con.print(f"[yellow]note:[/] {w}")
+    if report:
+        con.print(f"report: {Path(report) / 'report.html'}")

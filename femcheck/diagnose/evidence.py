@@ -49,6 +49,9 @@ class Explanation:
     chi2: float
     n_params: int
     payload: object = dataclasses.field(default=None, compare=False, repr=False)
+    #: extra -2 ln prior of a model chosen by a search over candidates, e.g. the extended BIC's 2 ln C(p, k)
+    #: for k places picked among p (Chen & Chen, Biometrika 95 (2008) 759); 0 for a fixed model
+    penalty: float = 0.0
 
     @property
     def name(self) -> str:
@@ -75,7 +78,7 @@ def bic(chi2: float, n_params: int, n_data: int) -> float:
 
 def posterior(explanations, n_data: int) -> np.ndarray:
     """(n,) BIC posterior probabilities with equal priors (sum 1); see module docstring."""
-    b = np.array([bic(e.chi2, e.n_params, n_data) for e in explanations], float)
+    b = np.array([bic(e.chi2, e.n_params, n_data) + e.penalty for e in explanations], float)
     w = np.exp(-0.5 * (b - b.min()))
     return w / w.sum()
 
@@ -104,7 +107,7 @@ class Weighing:
 
     def alternatives(self, top: int = 10) -> list[dict]:
         return [{"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
-                 "bic": bic(e.chi2, e.n_params, self.n_data)}
+                 "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty}
                 for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
 
 

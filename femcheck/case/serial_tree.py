@@ -1,0 +1,189 @@
+"""The serial-tree case (issue 23): a robot whose kinematics is a tree of revolute DH rows, with link masses,
+gravity, markers, nominal joint springs, and the options of the self-weight diagnosis.
+
+TOML layout (SI; angles only in keys ending ``_deg``; docs/diagnose.md has an annotated template)::
+
+    [meta]            kind = "serial_tree", name, reference
+    [kinematics]      convention = "standard" | "modified"  (stated once for every row)
+    [gravity]         vector_m_per_s2 = [0, 0, -9.81]  in the robot's base frame
+    [[joints]]        one table per DH row, in the order of the CSV's q1..qN columns (coupled rows excepted):
+                      name, parent ("base" or an earlier row's name; default: the row before), branch (label
+                      used to name places, default: the parent's branch, or "main"), a_m, alpha_deg, d_m,
+                      theta_offset_deg; a static frame before the row: static_origin_m, static_rpy_deg (in the
+                      parent's frame); coupling = {row = c, ...} for a passive row (q = sum c q_row, no CSV
+                      column); mass_kg and com_m (the link carried by the row, in its frame); nominal springs:
+                      stiffness_Nm_per_rad (torsion; absent = rigid), tilt_stiffness_Nm_per_rad = [kx, ky],
+                      bending_EI_Nm2 (link after the row); size (a label that lumps joints of one size)
+    [[markers]]       name, link (row name), offset_m (nominal, in the row's frame)
+    [payload]         optional: link, com_m -- where the CSV's payload_kg hangs
+    [measurement]     sigma_m (per-coordinate noise of a marker position, optional), folds
+    [diagnosis]       fixed_point_passes, prior sigmas of the nuisance parameters (see ``DiagnosisOptions``)
+
+Frames. Standard DH: ``T_row = S Rz(theta) Tz(d) Tx(a) Rx(alpha)``, the joint turns about the z axis of
+``parent * S``; modified (Craig): ``T_row = S Rx(alpha) Tx(a) Rz(theta) Tz(d)``, the joint turns about the
+row's own z. ``S`` is the static frame (origin, then roll-pitch-yaw about fixed x, y, z). The row's frame
+carries its link's centre of mass, its markers, and its children.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from femcheck.case.schema import CaseMeta as Meta, CaseRecord, Context, build_section, build_sections, option, quantity
+
+CASE_KIND = "serial_tree"
+
+
+@dataclass(frozen=True)
+class TreeKinematics:
+    convention: Literal["standard", "modified"] = option(doc="DH convention of every row: standard or modified (Craig)")
+
+
+@dataclass(frozen=True)
+class Gravity:
+    vector_m_per_s2: tuple[float, float, float] = quantity("m/s^2", check="any", default=(0.0, 0.0, -9.81),
+                                                           doc="gravity in the base frame")
+
+
+@dataclass(frozen=True)
+class TreeJoint:
+    """One DH row of the tree and what it carries."""
+
+    name: str = option(doc="row name (unique); markers, payload and children refer to it")
+    a_m: float = quantity("m", check="any")
+    alpha_deg: float = quantity("deg", check="any")
+    d_m: float = quantity("m", check="any")
+    theta_offset_deg: float = quantity("deg", check="any", default=0.0, doc="theta = q + offset")
+    parent: str = option("", doc="'base' or an earlier row; default: the row before")
+    branch: str = option("", doc="label of the branch (e.g. 'right_arm'); default: the parent's, or 'main'")
+    size: str = option("", doc="label lumping joints of one size (causes may be fitted per size)")
+    static_origin_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0),
+                                                           doc="static frame before the row: origin in the parent's frame")
+    static_rpy_deg: tuple[float, float, float] = quantity("deg", check="any", default=(0.0, 0.0, 0.0),
+                                                          doc="static frame: roll, pitch, yaw about fixed x, y, z")
+    coupling: dict[str, float] | None = option(None, doc="passive row: q = sum_j c_j q_j over the named rows")
+    mass_kg: float = quantity("kg", check="nonnegative", default=0.0)
+    com_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0), doc="centre of mass in the row's frame")
+    stiffness_Nm_per_rad: float | None = quantity("N m/rad", default=None, doc="nominal torsion spring; absent = rigid")
+    tilt_stiffness_Nm_per_rad: tuple[float, float] | None = quantity("N m/rad", default=None,
+                                                                     doc="nominal tilt springs about joint-frame x, y")
+    bending_EI_Nm2: float | None = quantity("N m^2", default=None, doc="nominal bending stiffness of the row's link")
+
+
+@dataclass(frozen=True)
+class Marker:
+    name: str = option(doc="marker name used in the CSV's marker column")
+    link: str = option(doc="row whose frame carries the marker")
+    offset_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0), doc="nominal offset in that frame")
+
+
+@dataclass(frozen=True)
+class Payload:
+    link: str = option(doc="row whose frame carries the payload of the CSV's payload_kg column")
+    com_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0))
+
+
+@dataclass(frozen=True)
+class Measurement:
+    sigma_m: float | None = quantity("m", default=None, doc="noise of one coordinate of a marker position (1 sigma)")
+    folds: int = quantity("-", default=5, doc="K of the K-fold cross-validation over poses (CSV fold column wins)")
+
+
+@dataclass(frozen=True)
+class DiagnosisOptions:
+    """Options of the self-weight diagnosis; the prior sigmas are the stated weak Gaussian prior of the nuisance
+    parameters around their nominal values (issue 23 item 3)."""
+
+    fixed_point_passes: int = quantity("-", default=2, doc="passes of the torque equilibrium at the deflected configuration")
+    prior_length_m: float = quantity("m", default=0.01, doc="prior sigma of d, a and static-frame offsets")
+    prior_angle_deg: float = quantity("deg", default=2.0, doc="prior sigma of theta offsets, alpha and static-frame angles")
+    prior_marker_m: float = quantity("m", default=0.05, doc="prior sigma of each marker offset coordinate")
+    backlash_torque_Nm: float | None = quantity("N m", default=None,
+                                                doc="torque over which backlash takes up (tanh width); default 5 % of each joint's median |tau|")
+
+
+@dataclass(frozen=True)
+class SerialTreeCase(CaseRecord):
+    """A validated serial-tree case. Immutable; ``tree`` is the array form used by every computation."""
+
+    meta: Meta
+    kinematics: TreeKinematics
+    gravity: Gravity
+    joints: tuple[TreeJoint, ...]
+    markers: tuple[Marker, ...]
+    payload: Payload | None
+    measurement: Measurement
+    diagnosis: DiagnosisOptions
+
+    kind = CASE_KIND
+
+    @property
+    def tree(self):
+        from femcheck.robot.tree import RobotTree
+        return RobotTree.from_case(self)
+
+
+def _check_tree(ctx: Context, joints: tuple[TreeJoint, ...], markers, payload) -> tuple[TreeJoint, ...]:
+    """Resolve default parents and branches; every reference names an earlier row (one line per problem)."""
+    import dataclasses
+    names: dict[str, int] = {}
+    out = []
+    for i, j in enumerate(joints):
+        if j.name in names or j.name == "base":
+            raise ctx.error(f"joints[{i}].name", f"{j.name!r} is used twice (or is the reserved 'base')")
+        parent = j.parent or (out[-1].name if out else "base")
+        if parent != "base" and parent not in names:
+            raise ctx.error(f"joints[{i}].parent", f"{parent!r} is not an earlier row; expected 'base' or one of {list(names)}")
+        branch = j.branch or (out[names[parent]].branch if parent != "base" else "main")
+        if j.coupling is not None:
+            if not j.coupling:
+                raise ctx.error(f"joints[{i}].coupling", "is empty; expected {row = c, ...}")
+            for k, c in j.coupling.items():
+                if k not in names:
+                    raise ctx.error(f"joints[{i}].coupling.{k}", f"is not an earlier row; expected one of {list(names)}")
+                if joints[names[k]].coupling is not None:
+                    raise ctx.error(f"joints[{i}].coupling.{k}", "is itself coupled; couple to independent rows")
+                if not math.isfinite(c):
+                    raise ctx.error(f"joints[{i}].coupling.{k}", f"got {c}; expected a finite ratio")
+        names[j.name] = i
+        out.append(dataclasses.replace(j, parent=parent, branch=branch))
+    mnames = set()
+    for i, m in enumerate(markers):
+        if m.link not in names:
+            raise ctx.error(f"markers[{i}].link", f"{m.link!r} is not a row; expected one of {list(names)}")
+        if m.name in mnames:
+            raise ctx.error(f"markers[{i}].name", f"{m.name!r} is used twice")
+        mnames.add(m.name)
+    if payload is not None and payload.link not in names:
+        raise ctx.error("payload.link", f"{payload.link!r} is not a row; expected one of {list(names)}")
+    if not any(j.mass_kg > 0 for j in out) and payload is None:
+        raise ctx.error("joints", "no row has mass_kg > 0 and there is no [payload]: a self-weight model needs masses")
+    return tuple(out)
+
+
+def build(raw: dict, path) -> SerialTreeCase:
+    """Validate a parsed TOML document into a :class:`SerialTreeCase` (errors name file and key)."""
+    ctx = Context(path)
+    parts = build_sections(ctx, raw, {"meta": Meta, "kinematics": TreeKinematics, "gravity": Gravity,
+                                      "measurement": Measurement, "diagnosis": DiagnosisOptions},
+                           optional=("meta", "gravity", "measurement", "diagnosis"),
+                           also_allowed=("joints", "markers", "payload"))
+    for key in ("joints", "markers"):
+        if not isinstance(raw.get(key), list) or not raw[key]:
+            raise ctx.error(key, f"expected one or more [[{key}]] tables")
+    joints = tuple(build_section(ctx, f"joints[{i}]", TreeJoint, t) for i, t in enumerate(raw["joints"]))
+    markers = tuple(build_section(ctx, f"markers[{i}]", Marker, t) for i, t in enumerate(raw["markers"]))
+    payload = build_section(ctx, "payload", Payload, raw["payload"]) if "payload" in raw else None
+    joints = _check_tree(ctx, joints, markers, payload)
+    if parts["measurement"].folds < 2:
+        raise ctx.error("measurement.folds", f"got {parts['measurement'].folds}; expected >= 2")
+    if parts["diagnosis"].fixed_point_passes < 1:
+        raise ctx.error("diagnosis.fixed_point_passes", "expected >= 1")
+    g = np.asarray(parts["gravity"].vector_m_per_s2)
+    if not np.all(np.isfinite(g)) or np.linalg.norm(g) == 0:
+        raise ctx.error("gravity.vector_m_per_s2", "expected a finite, non-zero vector")
+    return SerialTreeCase(meta=parts["meta"], kinematics=parts["kinematics"], gravity=parts["gravity"], joints=joints,
+                          markers=markers, payload=payload, measurement=parts["measurement"], diagnosis=parts["diagnosis"])

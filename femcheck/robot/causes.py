@@ -1,0 +1,107 @@
+"""The serial cause vocabulary of the self-weight diagnosis (issue 23 item 4).
+
+Each cause is a direction in the flat elastic parameter space of :mod:`femcheck.robot.elastic` (an increment on
+the case's nominal springs, so a cause can *add* an element the model lacks, e.g. joint compliance to a rigid
+model) and a *place*: the joints (or links) it sits in. A cause is fitted in every placement its units allow and
+the placement with the smallest BIC stands for it:
+
+* ``all``: one parameter shared by every eligible joint (or link);
+* ``size``: one per ``size`` label of the case (lumped by joint size), when the case labels sizes;
+* ``branch``: one per branch (torso, each arm, head), when the tree has several;
+* ``joint``: one per joint, pruned by backward elimination (a joint whose parameter is under
+  ``T_KEEP`` standard errors, or on its bound, is dropped), so the cause names the joints it sits in.
+
+Ids (contract): ``joint_torsion_compliance``, ``joint_tilt_compliance``, ``gear_clearance``,
+``link_bending_compliance``, ``mass_scale``.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class CauseSpec:
+    """``flat``: the slice of the flat elastic vector it moves; ``unit``: ``joint`` (independent joints), ``row``
+    (links) or ``single``; ``param``: parameter name with unit; ``lower``: bound on the increment, ``nominal``
+    (the total may not go below zero) or a number."""
+
+    id: str
+    flat: str
+    unit: str
+    param: str
+    lower: object
+    physics: str
+
+
+VOCABULARY: tuple[CauseSpec, ...] = (
+    CauseSpec("joint_torsion_compliance", "torsion", "joint", "compliance_rad_per_Nm", "nominal",
+              "torsion spring of the drive (gear, belt, motor): dq = c tau"),
+    CauseSpec("joint_tilt_compliance", "tilt", "row", "compliance_rad_per_Nm", "nominal",
+              "two transversal springs per joint (bearings, housing; seed 002): phi = c (M.x, M.y)"),
+    CauseSpec("gear_clearance", "backlash", "joint", "backlash_rad", 0.0,
+              "backlash: the joint settles by b on the flank the gravity torque pushes it to, dq = b tanh(tau/tau_s)"),
+    CauseSpec("link_bending_compliance", "bending", "row", "compliance_per_Nm2", "nominal",
+              "Euler-Bernoulli bending of the link after the joint under its tip load, c = 1/(EI)"),
+    CauseSpec("mass_scale", "mass_scale", "single", "mass_scale_increment", -1.0,
+              "the CAD masses off by a common factor s (needs an elastic element in the model)"),
+)
+
+CAUSE_IDS = tuple(c.id for c in VOCABULARY)
+#: a per-joint parameter is kept when it is at least this many standard errors from zero
+T_KEEP = 3.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Placement:
+    """A cause in one placement: ``groups`` (k lists of unit indices), their ``labels`` (k,), ``kind``."""
+
+    spec: CauseSpec
+    kind: str
+    groups: tuple[tuple[int, ...], ...]
+    labels: tuple[str, ...]
+
+    @property
+    def n_params(self) -> int:
+        return len(self.groups)
+
+    def restricted(self, keep) -> "Placement":
+        keep = list(keep)
+        return Placement(self.spec, self.kind, tuple(self.groups[i] for i in keep), tuple(self.labels[i] for i in keep))
+
+
+def candidate_placements(spec: CauseSpec, tree, eligible: np.ndarray) -> list[Placement]:
+    """The placements of ``spec`` over its ``eligible`` units (indices into the cause's slice)."""
+    if spec.unit == "single":
+        return [Placement(spec, "all", ((0,),), ("all",))] if len(eligible) else []
+    units = [int(u) for u in eligible]
+    if not units:
+        return []
+    rows = tree.independent[units] if spec.unit == "joint" else np.asarray(units)
+    out = [Placement(spec, "all", (tuple(units),), ("all",))]
+    for kind, labels in (("size", tree.size), ("branch", tree.branch)):
+        lab = [labels[r] for r in rows]
+        distinct = list(dict.fromkeys(lab))
+        if len(distinct) > 1 and all(lab):
+            out.append(Placement(spec, kind, tuple(tuple(u for u, l in zip(units, lab) if l == d) for d in distinct),
+                                 tuple(distinct)))
+    if len(units) > 1:
+        out.append(Placement(spec, "joint", tuple((u,) for u in units), tuple(tree.names[r] for r in rows)))
+    return out
+
+
+def place_text(placement: Placement, tree, values: np.ndarray | None = None) -> str:
+    """Where the cause sits, in words ('joints 2-4 of right_arm (...)', 'all joints', 'branch left_arm')."""
+    spec = placement.spec
+    if spec.unit == "single":
+        return "the whole robot (every link mass)"
+    word = "joints" if spec.unit == "joint" else "links after joints"
+    if placement.kind == "all":
+        return f"all {word} (one lumped value)"
+    if placement.kind in ("size", "branch"):
+        return "; ".join(f"{placement.kind} {l}" for l in placement.labels)
+    units = [g[0] for g in placement.groups]
+    rows = tree.independent[units] if spec.unit == "joint" else np.asarray(units)
+    text = tree.joint_place(rows)
+    return text if spec.unit == "joint" else "links after " + text

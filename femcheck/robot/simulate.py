@@ -1,0 +1,240 @@
+"""Generated robots and measured-position data with hidden effects (issue 23 item 6).
+
+Robots (case documents, so they go through the same validation as a user's file):
+
+* :func:`humanoid_case`: a torso (``torso_joints`` rows) feeding two arms of ``arm_joints`` rows and optionally a
+  2-row head, one marker per end effector, standard DH, link masses at mid-link;
+* :func:`industrial_case`: a 6-joint industrial arm (ABB-IRB-120-like proportions, modified DH).
+
+Dimensions are drawn around plausible values by a seed, so tests see variety rather than one robot.
+
+:func:`simulate_positions` makes a dataset: random poses inside the joint ranges, a random sensor frame, random
+geometric errors, hidden elastic effects from the vocabulary (as increments of the flat elastic vector),
+optional *foreign* effects that the vocabulary does not contain, and Gaussian noise.
+
+Foreign effects: ``drift`` (the sensor drifts linearly over the measurement order, m per pose),
+``sensor_scale`` (the sensor's z axis reads (1 + s) too long: an anisotropic scale the geometry cannot absorb),
+``compliant_base`` (the pedestal tilts under the whole robot's weight moment, c rad/(N m), about a pivot
+``BASE_PIVOT_DEPTH_M`` below the base: a column or pedestal; a pivot at joint 1 would be joint 1's own tilt springs,
+which the vocabulary contains), ``cross_talk`` (a reading error proportional to the marker's height, x += s z).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout
+from femcheck.robot.positions import MarkerPositions
+from femcheck.robot.tree import Geometry, forward, gravity_wrenches, rotation
+
+FOREIGN = ("drift", "sensor_scale", "compliant_base", "cross_talk")
+BASE_PIVOT_DEPTH_M = 0.8
+
+
+def _arm_rows(rng, prefix, branch, n, parent, static_origin, static_rpy, size_of):
+    rows = []
+    for i in range(n):
+        # alternating pitch/roll joints: a shoulder-elbow-wrist chain of ~0.25 m links
+        long_link = i in (1, 3) or (n <= 4 and i % 2 == 1)
+        row = {"name": f"{prefix}{i + 1}", "branch": branch, "size": size_of(i),
+               "a_m": float(rng.uniform(0.0, 0.04)), "alpha_deg": 90.0 if i % 2 == 0 else -90.0,
+               "d_m": float(rng.uniform(0.22, 0.30)) if long_link else float(rng.uniform(0.0, 0.05)),
+               "theta_offset_deg": float(rng.choice([0.0, 90.0, -90.0])) if i in (0, 1) else 0.0,
+               "mass_kg": float(rng.uniform(0.8, 2.5) * (1.0 - 0.1 * i)),
+               "com_m": [0.0, 0.0, 0.0]}
+        # mid-link in the row's frame: the previous origin sits at -a x_i - d z_(i-1), z_(i-1) = (0, sin alpha, cos alpha)
+        al = math.radians(row["alpha_deg"])
+        row["com_m"] = [-0.5 * row["a_m"], -0.5 * row["d_m"] * math.sin(al), -0.5 * row["d_m"] * math.cos(al)]
+        if i == 0:
+            row["parent"] = parent
+            row["static_origin_m"] = list(static_origin)
+            row["static_rpy_deg"] = list(static_rpy)
+        rows.append(row)
+    return rows
+
+
+def humanoid_case(seed: int = 0, arm_joints: int = 7, torso_joints: int = 3, head: bool = True, sigma_m: float | None = 2e-4,
+                  head_marker: bool = True):
+    """A torso + two arms (+ head) serial-tree case (validated object) and its TOML document (dict)."""
+    rng = np.random.default_rng(seed)
+    size_of = lambda i: "large" if i < 2 else "medium" if i < 4 else "small"
+    rows = []
+    for i in range(torso_joints):
+        rows.append({"name": f"t{i + 1}", "branch": "torso", "size": "large",
+                     "a_m": 0.0, "alpha_deg": [-90.0, 90.0, 0.0][i % 3], "d_m": [0.12, 0.0, 0.25][i % 3] + float(rng.uniform(0, 0.03)),
+                     "theta_offset_deg": 0.0, "mass_kg": float(rng.uniform(3.0, 6.0)), "com_m": [0.0, 0.0, -0.05]})
+    top = rows[-1]["name"]
+    for side, sgn in (("right", -1.0), ("left", 1.0)):
+        rows += _arm_rows(rng, side[0], f"{side}_arm", arm_joints, top, (0.0, sgn * float(rng.uniform(0.17, 0.22)), 0.05),
+                          (sgn * 90.0, 0.0, 0.0), size_of)
+    markers = [{"name": "right_hand", "link": f"r{arm_joints}", "offset_m": [0.02, 0.0, 0.09]},
+               {"name": "left_hand", "link": f"l{arm_joints}", "offset_m": [0.02, 0.0, 0.09]}]
+    if head:
+        rows += [{"name": "h1", "parent": top, "branch": "head", "size": "small", "a_m": 0.0, "alpha_deg": -90.0,
+                  "d_m": 0.08, "static_origin_m": [0.0, 0.0, 0.08], "mass_kg": 0.4, "com_m": [0.0, 0.0, 0.0]},
+                 {"name": "h2", "branch": "head", "size": "small", "a_m": 0.06, "alpha_deg": 0.0, "d_m": 0.0,
+                  "mass_kg": 1.2, "com_m": [-0.03, 0.0, 0.0]}]
+        if head_marker:
+            markers.append({"name": "head", "link": "h2", "offset_m": [0.03, 0.0, 0.05]})
+    raw = {"meta": {"name": f"humanoid_tree_seed{seed}", "kind": "serial_tree",
+                    "reference": "generated by femcheck.robot.simulate.humanoid_case"},
+           "kinematics": {"convention": "standard"}, "gravity": {"vector_m_per_s2": [0.0, 0.0, -9.81]},
+           "joints": rows, "markers": markers}
+    if sigma_m is not None:
+        raw["measurement"] = {"sigma_m": sigma_m}
+    return _build(raw), raw
+
+
+def industrial_case(seed: int = 0, sigma_m: float | None = 5e-5, springs: bool = False):
+    """A 6-joint industrial arm (modified DH, IRB-120-like proportions) with a tool marker; case and document.
+    ``springs``: nominal joint torsion springs (1.2e4 .. 1.5e3 N m/rad, wrist softer), so that ``mass_scale`` applies."""
+    rng = np.random.default_rng(seed)
+    j = lambda f: float(f * rng.uniform(0.9, 1.1))
+    rows = [
+        {"name": "j1", "a_m": 0.0, "alpha_deg": 0.0, "d_m": j(0.29), "mass_kg": j(6.0), "com_m": [0.0, 0.0, -0.05], "size": "large"},
+        {"name": "j2", "a_m": 0.0, "alpha_deg": -90.0, "d_m": 0.0, "theta_offset_deg": -90.0, "mass_kg": j(4.0),
+         "com_m": [j(0.13), 0.0, 0.0], "size": "large"},
+        {"name": "j3", "a_m": j(0.27), "alpha_deg": 0.0, "d_m": 0.0, "mass_kg": j(3.0), "com_m": [0.03, 0.0, 0.0], "size": "medium"},
+        {"name": "j4", "a_m": j(0.07), "alpha_deg": -90.0, "d_m": j(0.30), "mass_kg": j(1.5), "com_m": [0.0, 0.0, -0.12], "size": "small"},
+        {"name": "j5", "a_m": 0.0, "alpha_deg": 90.0, "d_m": 0.0, "mass_kg": j(0.6), "com_m": [0.0, 0.0, 0.0], "size": "small"},
+        {"name": "j6", "a_m": 0.0, "alpha_deg": -90.0, "d_m": j(0.072), "mass_kg": j(0.2), "com_m": [0.0, 0.0, -0.01], "size": "small"},
+    ]
+    raw = {"meta": {"name": f"industrial6_seed{seed}", "kind": "serial_tree",
+                    "reference": "generated by femcheck.robot.simulate.industrial_case"},
+           "kinematics": {"convention": "modified"}, "gravity": {"vector_m_per_s2": [0.0, 0.0, -9.81]},
+           "joints": rows, "markers": [{"name": "tool", "link": "j6", "offset_m": [0.04, 0.02, 0.10]}],
+           "payload": {"link": "j6", "com_m": [0.0, 0.0, 0.05]}}
+    if springs:
+        for r, k in zip(rows, (1.2e4, 1.0e4, 6.0e3, 2.0e3, 2.0e3, 1.5e3)):
+            r["stiffness_Nm_per_rad"] = j(k)
+    if sigma_m is not None:
+        raw["measurement"] = {"sigma_m": sigma_m}
+    return _build(raw), raw
+
+
+def _build(raw):
+    from femcheck.case.registry import build_case
+    return build_case(raw, f"<generated {raw['meta']['name']}>")
+
+
+def random_poses(tree, n: int, rng, limit_deg: float = 100.0) -> np.ndarray:
+    """(n, n_joints) joint angles uniform in +-limit_deg (the first joint of a branch over the full turn)."""
+    return np.deg2rad(rng.uniform(-limit_deg, limit_deg, size=(n, tree.n_joints)))
+
+
+def effect_increment(tree, effects: dict) -> np.ndarray:
+    """Flat elastic increment of ``effects`` {cause id: {row name or 'all': value}} (values in the cause's unit;
+    mass_scale: {'all': s - 1})."""
+    lay = flat_layout(tree)
+    inc = np.zeros(lay["mass_scale"].stop)
+    unit_rows = {"torsion": list(tree.independent), "backlash": list(tree.independent),
+                 "tilt": list(range(tree.n_rows)), "bending": list(range(tree.n_rows)), "mass_scale": [0]}
+    flat_of = {"joint_torsion_compliance": "torsion", "joint_tilt_compliance": "tilt", "gear_clearance": "backlash",
+               "link_bending_compliance": "bending", "mass_scale": "mass_scale"}
+    for cid, where in effects.items():
+        kind = flat_of[cid]
+        for name, v in where.items():
+            if kind == "mass_scale":
+                inc[lay[kind].start] += v
+                continue
+            targets = unit_rows[kind] if name == "all" else [tree.names.index(name)]
+            for r in targets:
+                inc[lay[kind].start + unit_rows[kind].index(r)] += v
+    return inc
+
+
+def simulate_positions(case, n_poses: int = 200, effects: dict | None = None, foreign: dict | None = None,
+                       sigma_m: float = 2e-4, geometric_error: float = 1.0, seed: int = 0, passes: int = 4,
+                       payload_kg: np.ndarray | None = None, folds: int | None = None) -> tuple[MarkerPositions, dict]:
+    """Readings of every marker at ``n_poses`` random poses; returns (data, truth)."""
+    rng = np.random.default_rng(seed)
+    tree = case.tree
+    q = random_poses(tree, n_poses, rng)
+    g = Geometry(row=geometric_error * np.column_stack([rng.normal(0, math.radians(0.2), tree.n_rows), rng.normal(0, 1e-3, tree.n_rows),
+                                                        rng.normal(0, 1e-3, tree.n_rows), rng.normal(0, math.radians(0.2), tree.n_rows)]),
+                 static=geometric_error * np.column_stack([rng.normal(0, 1e-3, (tree.n_rows, 3)), rng.normal(0, math.radians(0.2), (tree.n_rows, 3))]),
+                 marker=geometric_error * rng.normal(0, 2e-3, (len(tree.marker_names), 3)))
+    params = ElasticParams.nominal(tree).shifted(tree, effect_increment(tree, effects or {}))
+    pay = np.zeros(n_poses) if payload_kg is None else np.asarray(payload_kg, float)
+    from femcheck.robot.diagnosis import _backlash_width
+    from femcheck.robot.positions import MarkerPositions as MP
+    labels = tuple(f"p{i:04d}" for i in range(n_poses))
+    nm = len(tree.marker_names)
+    pose = np.repeat(np.arange(n_poses), nm)
+    marker = np.tile(np.arange(nm), n_poses)
+    probe = MP("<sim>", labels, q, pay, None, pose, marker, np.zeros((pose.size, 3)))
+    bw = _backlash_width(tree, probe, case.diagnosis)
+    fk = equilibrium(tree, q, g, params, passes, pay, bw)
+    p = fk.markers[pose, marker]
+    foreign = foreign or {}
+    if "compliant_base" in foreign:
+        fk0 = forward(tree, q @ tree.coupling.T, g)
+        F, M = gravity_wrenches(tree, fk0, pay, params.mass_scale)
+        roots = np.flatnonzero(tree.parent < 0)
+        pivot = np.array([0.0, 0.0, -BASE_PIVOT_DEPTH_M])
+        Mb = (M[:, roots] + np.cross(fk0.origins[:, roots] - pivot, F[:, roots])).sum(axis=1)
+        Mb[:, 2] = 0.0            # the pedestal tilts; it does not yaw
+        R = rotation(foreign["compliant_base"] * Mb)
+        p = np.einsum("mij,mj->mi", R[pose], p - pivot) + pivot
+    R_s = rotation(rng.normal(0, 0.6, 3))
+    t_s = rng.normal(0, 0.5, 3)
+    x = p @ R_s.T + t_s
+    if "sensor_scale" in foreign:
+        x[:, 2] *= 1.0 + foreign["sensor_scale"]
+    if "cross_talk" in foreign:
+        x[:, 0] += foreign["cross_talk"] * x[:, 2]
+    if "drift" in foreign:
+        x += foreign["drift"] * pose[:, None] * np.array([1.0, -0.5, 0.7]) / np.linalg.norm([1.0, -0.5, 0.7])
+    x = x + rng.normal(0, sigma_m, x.shape)
+    fold = None if folds is None else (np.arange(n_poses) % folds)
+    data = MP("<simulated>", labels, q, pay, fold, pose, marker, x)
+    return data, {"geometry": g, "params": params, "sensor_R": R_s, "sensor_t": t_s}
+
+
+def to_toml(raw: dict) -> str:
+    """TOML text of a case document made of tables, arrays of tables, scalars, arrays and inline tables."""
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return '"' + v.replace('"', '\\"') + '"'
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    out = []
+    for key, tab in raw.items():
+        if isinstance(tab, list):
+            for t in tab:
+                out.append(f"\n[[{key}]]")
+                out += [f"{k} = {val(v)}" for k, v in t.items()]
+        else:
+            out.append(f"\n[{key}]")
+            out += [f"{k} = {val(v)}" for k, v in tab.items()]
+    return "\n".join(out).lstrip() + "\n"
+
+
+def effect_rms(case, effects: dict, n_poses: int = 60, seed: int = 0) -> float:
+    """RMS marker displacement (m) that ``effects`` cause at random poses (rigid geometry, no noise)."""
+    rng = np.random.default_rng(seed)
+    tree = case.tree
+    q = random_poses(tree, n_poses, rng)
+    from femcheck.robot.diagnosis import _backlash_width
+    probe = MarkerPositions("<probe>", tuple(map(str, range(n_poses))), q, np.zeros(n_poses), None,
+                            np.zeros(1, int), np.zeros(1, int), np.zeros((1, 3)))
+    bw = _backlash_width(tree, probe, case.diagnosis)
+    base = ElasticParams.nominal(tree)
+    a = equilibrium(tree, q, None, base, 1, None, bw).markers
+    b = equilibrium(tree, q, None, base.shifted(tree, effect_increment(tree, effects)), 1, None, bw).markers
+    return float(np.sqrt(np.mean((b - a) ** 2)))
+
+
+def scaled(case, effects: dict, rms_m: float) -> dict:
+    """``effects`` scaled so that together they move the markers by ``rms_m`` RMS (mass_scale scales its s - 1)."""
+    tiny = 1e-8     # probe in the linear range: compliances of 1e-8 rad/(N m) move nothing by more than microns
+    r = effect_rms(case, {cid: {w: v * tiny for w, v in where.items()} for cid, where in effects.items()}) / tiny
+    k = rms_m / r if r > 0 else 0.0
+    return {cid: {w: v * k for w, v in where.items()} for cid, where in effects.items()}
