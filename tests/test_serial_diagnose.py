@@ -166,3 +166,15 @@ def test_bad_csv_names_row_and_column(tmp_path, capsys, mutate, column):
     assert main(["diagnose", str(tmp_path / "robot.toml"), str(tmp_path / "d.csv")]) == 2
     err = capsys.readouterr().err
     assert f"column '{column}'" in err and err.count("\n") == 1
+
+
+def test_occluded_markers_are_left_out_and_counted():
+    """Empty or nan coordinates (an occluded motion-capture marker) drop that reading, not the file."""
+    from femcheck.robot.positions import parse_marker_csv
+    case, _ = humanoid_case(0, head=False)
+    data, _ = simulate_positions(case, 12, seed=2)
+    lines = format_marker_csv(data, case.tree.marker_names).splitlines()
+    lines[3] = ",".join(lines[3].split(",")[:-4] + ["", "", "", "0"])
+    lines[5] = ",".join(lines[5].split(",")[:-4] + ["nan", "1.0", "2.0", "0"])
+    back = parse_marker_csv("\n".join(lines), "d.csv", case.tree.marker_names, case.tree.n_joints)
+    assert back.missing == 2 and back.n_readings == data.n_readings - 2

@@ -29,8 +29,15 @@ def register(app: typer.Typer) -> None:
         parts: str = typer.Option("solid", "--parts", help="--model fe: guideways and links as solid or beam parts"),
         no_sweep: bool = typer.Option(False, "--no-sweep", help="omit the preload-identification staircase at P0"),
         force: bool = typer.Option(False, "--force", help="overwrite existing output files"),
+        poses: int = typer.Option(300, "--poses", min=10, help="serial robots: random poses (all markers at each)"),
+        sigma_mm: float = typer.Option(0.2, "--sigma-mm", help="serial robots: Gaussian noise per coordinate, mm"),
+        foreign: list[str] = typer.Option([], "--foreign", help="serial robots: an effect outside the vocabulary, "
+                                          "NAME=VALUE with NAME drift | sensor_scale | compliant_base | cross_talk"),
     ):
-        """Readings of the paper's protocol (9 points, directions, preload, trials, dial resolution + noise)."""
+        """Readings of the paper's protocol (9 points, directions, preload, trials, dial resolution + noise); for a
+        serial robot (serial_tree case), absolute marker positions at random poses under self-weight, with random
+        geometric errors and sensor frame, hidden elastic causes (``--effect CAUSE:JOINT=VALUE,...``, JOINT a row
+        name or ``all``) and foreign effects."""
         from femcheck.experiment.simulate import parse_effect_spec, simulate
         from femcheck.report.atomic import check_output_file, refuse_input_overwrite, write_text_atomic
 
@@ -42,7 +49,9 @@ def register(app: typer.Typer) -> None:
             refuse_input_overwrite(p, [case_path])
             if Path(p).exists() and not force:
                 raise FemcheckError(f"refusing to overwrite existing {p} (use --force)")
-        case = load_case_for(case_path, "experiment simulate")
+        case = load_case_for(case_path, "experiment simulate", kinds=("haptic_6psu", "serial_tree", "serial_robot"))
+        if case.meta.kind in ("serial_tree", "serial_robot"):
+            return _simulate_serial(case, effect, foreign, seed, poses, sigma_mm, out, truth)
         try:
             hidden = [parse_effect_spec(e) for e in effect]
         except KeyError as exc:
@@ -78,3 +87,56 @@ def register(app: typer.Typer) -> None:
                    f"to {truth}")
 
     app.add_typer(exp, name="experiment")
+
+
+def _simulate_serial(case, effect, foreign, seed, poses, sigma_mm, out, truth) -> None:
+    import math
+
+    from femcheck.report.atomic import write_text_atomic
+    from femcheck.robot.causes import CAUSE_IDS
+    from femcheck.robot.positions import format_marker_csv
+    from femcheck.robot.serial_case import as_tree_case
+    from femcheck.robot.simulate import FOREIGN, simulate_positions
+
+    case = as_tree_case(case)
+    tree = case.tree
+
+    def number(text, hint):
+        try:
+            v = float(text)
+        except ValueError:
+            raise typer.BadParameter(f"{text!r} is not a number", param_hint=hint) from None
+        if not math.isfinite(v):
+            raise typer.BadParameter(f"{text!r}; expected a finite number", param_hint=hint)
+        return v
+
+    effects: dict = {}
+    for spec in effect:
+        cid, _, rest = spec.partition(":")
+        if cid not in CAUSE_IDS:
+            raise typer.BadParameter(f"{cid!r}; expected one of {', '.join(CAUSE_IDS)}", param_hint="--effect")
+        if not rest:
+            raise typer.BadParameter(f"{spec!r}; expected {cid}:JOINT=VALUE[,JOINT=VALUE] (JOINT a row or 'all')",
+                                     param_hint="--effect")
+        for item in rest.split(","):
+            name, _, val = item.partition("=")
+            if name != "all" and name not in tree.names:
+                raise typer.BadParameter(f"{name!r} is not a row of the case; expected 'all' or one of {list(tree.names)}",
+                                         param_hint="--effect")
+            effects.setdefault(cid, {})[name] = number(val, "--effect")
+    fx = {}
+    for spec in foreign:
+        name, _, val = spec.partition("=")
+        if name not in FOREIGN:
+            raise typer.BadParameter(f"{name!r}; expected one of {', '.join(FOREIGN)}", param_hint="--foreign")
+        fx[name] = number(val, "--foreign")
+    if not (math.isfinite(sigma_mm) and sigma_mm >= 0):
+        raise typer.BadParameter(f"{sigma_mm}; expected >= 0", param_hint="--sigma-mm")
+    data, tr = simulate_positions(case, poses, effects=effects, foreign=fx, sigma_m=sigma_mm * 1e-3, seed=seed)
+    write_text_atomic(out, format_marker_csv(data, tree.marker_names, meta={"generated_by": "femcheck experiment simulate",
+                                                                             "seed": seed}))
+    write_text_atomic(truth, json.dumps({"effects": effects, "foreign": fx, "sigma_m": sigma_mm * 1e-3, "seed": seed,
+                                         "mass_scale": tr["params"].mass_scale,
+                                         "sensor_rotation": tr["sensor_R"].tolist(), "sensor_translation_m": tr["sensor_t"].tolist()},
+                                        indent=2))
+    typer.echo(f"wrote {data.n_readings} marker readings ({data.n_poses} poses) to {out}; hidden truth to {truth}")

@@ -251,6 +251,12 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     say = progress or (lambda s: None)
     tree, opts = case.tree, case.diagnosis
     warnings: list[str] = []
+    if data.fold is not None and len(np.unique(data.fold)) < 2:
+        from femcheck.errors import MeasuredDataError
+        raise MeasuredDataError(data.source, None, "fold", f"has the single value {int(data.fold[0])}; cross-validation "
+                                "needs at least 2 folds (or leave the column out for K random folds)")
+    if data.missing:
+        warnings.append(f"{data.missing} readings with an empty or nan coordinate (occluded markers) left out")
     K = folds or case.measurement.folds
     # ---- noise -------------------------------------------------------------------------------------------
     sig_rep, rep_dof = _replicate_sigma(data)

@@ -2,7 +2,8 @@
 
 Columns: ``pose`` (label), ``marker`` (a name defined in the case), optional ``fold`` (integer), ``q1_rad`` ..
 ``qN_rad`` (the case's independent joints in order), ``x_mm``, ``y_mm``, ``z_mm`` (in the sensor frame), optional
-``payload_kg``. Lines starting with ``#`` are comments. Every marker row of a pose must repeat the pose's joint
+``payload_kg``. Lines starting with ``#`` are comments. A row whose x, y or z is empty or ``nan`` is an occluded
+marker: it is left out and counted (``missing``), not refused. Every marker row of a pose must repeat the pose's joint
 angles, fold and payload. Poses keep the order of their first row: that is the measurement order that a drift
 check uses.
 """
@@ -31,6 +32,7 @@ class MarkerPositions:
     pose: np.ndarray
     marker: np.ndarray
     xyz: np.ndarray
+    missing: int = 0
 
     @property
     def n_poses(self) -> int:
@@ -48,7 +50,7 @@ class MarkerPositions:
         keep = np.isin(self.pose, poses)
         return MarkerPositions(self.source, tuple(self.pose_labels[i] for i in poses), self.q[poses],
                                self.payload_kg[poses], None if self.fold is None else self.fold[poses],
-                               new[self.pose[keep]], self.marker[keep], self.xyz[keep])
+                               new[self.pose[keep]], self.marker[keep], self.xyz[keep], 0)
 
 
 def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> MarkerPositions:
@@ -75,6 +77,7 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
     pq, pf, pp = [], [], []
     r_pose, r_mk, r_xyz = [], [], []
     seen = set()
+    missing = 0
     for k, row in enumerate(reader):
         line = first + 2 + k
         if not row or all(not c.strip() for c in row):
@@ -91,6 +94,9 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
                 raise MeasuredDataError(source, line, c, f"{row[col[c]]!r}; expected a finite number")
             return v
 
+        if any(row[col[c]].strip().lower() in ("", "nan") for c in ("x_mm", "y_mm", "z_mm")):
+            missing += 1        # an occluded marker (motion capture): the reading is absent, not bad
+            continue
         label, mk = row[col["pose"]].strip(), row[col["marker"]].strip()
         if not label:
             raise MeasuredDataError(source, line, "pose", "is empty")
@@ -123,7 +129,7 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
         raise MeasuredDataError(source, None, None, "no data rows")
     return MarkerPositions(source, tuple(poses), np.array(pq, float), np.array(pp, float),
                            np.array(pf, int) if "fold" in col else None, np.array(r_pose), np.array(r_mk),
-                           np.array(r_xyz) * 1e-3)
+                           np.array(r_xyz) * 1e-3, missing)
 
 
 def read_marker_csv(path, marker_names, n_joints: int) -> MarkerPositions:
