@@ -52,7 +52,7 @@ CASES = [
     ("pose_unreachable", ["stiffness", "{d}/haptic_6psu.toml", "--pose", "0.3,0,0.375,0,0,0"], 2, "unreachable", None),
     ("stiffness_of_serial_robot", ["stiffness", "{d}/irb120.toml"], 2, "meta.kind", None),
     ("verify_of_parallel_vjm", ["verify", "{d}/hiss.toml", "--level", "none", "--out", "{d}/v_hiss"], 2, "meta.kind", "{d}/v_hiss"),
-    ("diagnose_of_serial_robot", ["diagnose", "{d}/irb120.toml", "{d}/measured.csv"], 2, "meta.kind", None),
+    ("diagnose_of_serial_robot_without_masses", ["diagnose", "{d}/irb120.toml", "{d}/measured.csv"], 2, "mass_kg", None),
     ("verify_out_unwritable", ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--out", "{d}/a_file/run"], 2, "--out", None),
     ("verify_out_user_folder", ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--out", "{d}/user_folder"], 2, "--force", None),
     ("verify_out_holds_case", ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--out", "{d}", "--force"], 2, "holds the input", None),

@@ -182,12 +182,11 @@ def _replicate_sigma(data: MarkerPositions) -> tuple[float, int]:
     _, inv = np.unique(key, axis=0, return_inverse=True)
     inv = inv.ravel()
     grp = inv[data.pose] * (data.marker.max() + 1) + data.marker
-    ss, dof = 0.0, 0
-    for g in np.unique(grp):
-        x = data.xyz[grp == g]
-        if len(x) > 1:
-            ss += float(((x - x.mean(0)) ** 2).sum())
-            dof += 3 * (len(x) - 1)
+    _, g = np.unique(grp, return_inverse=True)
+    n = np.bincount(g).astype(float)
+    mean = np.stack([np.bincount(g, data.xyz[:, k]) for k in range(3)], axis=1) / n[:, None]
+    ss = float(((data.xyz - mean[g]) ** 2).sum())
+    dof = int(3 * (n - 1).sum())
     return (float(np.sqrt(ss / dof)), dof) if dof >= 10 else (float("nan"), 0)
 
 
@@ -533,7 +532,8 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         e = heldout(rest)
         loo.append({"id": cid, "heldout_mean_error_mm": float(e.mean()), "heldout_max_error_mm": float(e.max()),
                     "removed_from": "+".join(chosen)})
-    pose_err = lambda e: np.array([e[data.pose == p].mean() for p in range(data.n_poses)])
+    count = np.bincount(data.pose, minlength=data.n_poses)
+    pose_err = lambda e: np.bincount(data.pose, e, minlength=data.n_poses) / np.maximum(count, 1)
     ho = {"mean_before": float(e_before.mean()), "mean_after": float(e_after.mean()),
           "median_before": float(np.median(e_before)), "median_after": float(np.median(e_after)),
           "max_before": float(e_before.max()), "max_after": float(e_after.max()), "folds": int(len(np.unique(fold)))}
