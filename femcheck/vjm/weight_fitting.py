@@ -101,7 +101,7 @@ def fit_weights(predict: Callable[[np.ndarray], np.ndarray], measured: np.ndarra
     ``error_weight``: diagonal of L (k,) (default identity; 1/sigma^2 whitens the residuals);
     ``jacobian(w)``: optional d predict / d log w (N, k, p) (else finite differences);
     ``restarts`` starts, the first at w = 1 (the seed's choice), the others log-uniform in ``start_range``
-    from ``numpy.random.default_rng(seed)`` (deterministic). If fewer than ``min_converged`` runs reach the best
+    (within ``bounds``) from ``numpy.random.default_rng(seed)`` (deterministic). If fewer than ``min_converged`` runs reach the best
     cost, further starts are made around the best fit (log-normal, sd 0.5) until they do or ``max_restarts``
     (default 4 x restarts) runs were made; this shows how far flat directions let the weights drift.
     ``profile``: 95 % intervals from the profile likelihood (each weight held at a value, the others refitted,
@@ -135,9 +135,10 @@ def fit_weights(predict: Callable[[np.ndarray], np.ndarray], measured: np.ndarra
         costs.append(2.0 * sol.cost)                     # E = sum e^T L e
         log.debug("start %d: E = %.6e after %d evaluations", len(runs), costs[-1], sol.nfev)
 
+    s_lo, s_hi = max(np.log(start_range[0]), lo), min(np.log(start_range[1]), hi)     # starts inside the bounds
     run(np.zeros(n_weights))
     for _ in range(restarts - 1):
-        run(rng.uniform(np.log(start_range[0]), np.log(start_range[1]), n_weights))
+        run(rng.uniform(s_lo, s_hi, n_weights))
     E0 = float(np.sum((measured * Lsqrt) ** 2))
 
     def converged_set():
