@@ -81,7 +81,7 @@ def _errors(A, c, dX):
 def register(app: typer.Typer) -> None:
     @app.command("identify")
     def identify_cmd(
-        case_path: str = typer.Argument(..., metavar="CASE", help="serial-robot case file (TOML), e.g. cases/cobot7.toml"),
+        case_path: str = typer.Argument(..., metavar="CASE", help="serial_robot or parallel_vjm case file (TOML), e.g. cases/cobot7.toml, cases/hiss.toml"),
         data_path: str = typer.Argument(..., metavar="DATA.csv", help="measurements (format in the module doc / docs/vjm.md)"),
         model: VJMModel = typer.Option(VJMModel.extended, "--model", help="conventional (torsion only) or extended (3 springs per joint)"),
         json_out: str = typer.Option(None, "--json", help="write the result as JSON to OUT ('-' = stdout)"),
