@@ -4,7 +4,7 @@ TOML layout (SI; angles only in keys ending ``_deg``)::
 
     [meta]        kind = "parallel_vjm", name
     [geometry]    architecture = "r_cube", crank_length_m, coupler_length_m, distal_length_m,
-                  platform_edge_m, knee_plane_offset_m, active_limit_deg
+                  platform_edge_m, knee_plane_offset_m, active_limit_deg, crank_axis_offset_m (optional)
     [links.crank], [links.coupler], [links.distal]
                   stiffness = 6 rows of 6 (N/m | N/rad ; N/rad | N m/rad) at the link's distal end, link frame
     [fitting]     weight_map (one index per diagonal entry of W, -1 = fixed at 1), variance_threshold, restarts
@@ -35,6 +35,8 @@ class Geometry:
     platform_edge_m: float = quantity("m", doc="d, cube edge; S = l1 + d")
     knee_plane_offset_m: float = quantity("m", doc="h, crank axis below the platform (assumed)")
     active_limit_deg: float = quantity("deg", default=30.0, doc="|phi| limit")
+    crank_axis_offset_m: float | None = quantity("m", check="any", default=None,
+                                                 doc="c, crank axis at S + c along e_j (assumed; default l1)")
     architecture: Literal["r_cube"] = option("r_cube", doc="leg layout (only the R-CUBE of seed 001)")
 
     def __post_init__(self):
@@ -106,7 +108,8 @@ class ParallelVJMCase(CaseRecord):
     def rcube(self) -> RCubeGeometry:
         g = self.geometry
         return RCubeGeometry(l1=g.crank_length_m, l2=g.coupler_length_m, l3=g.distal_length_m, d=g.platform_edge_m,
-                             knee_plane_offset_m=g.knee_plane_offset_m, active_limit_rad=float(np.deg2rad(g.active_limit_deg)))
+                             knee_plane_offset_m=g.knee_plane_offset_m, active_limit_rad=float(np.deg2rad(g.active_limit_deg)),
+                             crank_axis_offset_m=g.crank_axis_offset_m)
 
     @property
     def K_theta(self) -> np.ndarray:

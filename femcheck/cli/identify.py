@@ -1,4 +1,5 @@
-"""``femcheck identify``: joint compliances of a serial robot from measured tool deflections (seed 002 eqs. 9-12).
+"""``femcheck identify``: joint compliances of a serial robot from measured tool deflections (seed 002 eqs. 9-12),
+or, on a ``parallel_vjm`` case (HISS), seed 001's weight fit with its Tables 2-4 (``femcheck.vjm.hiss_pipeline``).
 
 DATA.csv: header ``set,q1..qn,fx,fy,fz,mx,my,mz,dx,dy,dz``; ``set`` is ``identification`` or ``verification``;
 q in deg, wrench in N and N m at the tool point (base frame), deflection in m. Partial: no confidence
@@ -80,15 +81,27 @@ def _errors(A, c, dX):
 def register(app: typer.Typer) -> None:
     @app.command("identify")
     def identify_cmd(
-        case_path: str = typer.Argument(..., metavar="CASE", help="serial-robot case file (TOML), e.g. cases/cobot7.toml"),
+        case_path: str = typer.Argument(..., metavar="CASE", help="serial_robot or parallel_vjm case file (TOML), e.g. cases/cobot7.toml, cases/hiss.toml"),
         data_path: str = typer.Argument(..., metavar="DATA.csv", help="measurements (format in the module doc / docs/vjm.md)"),
         model: VJMModel = typer.Option(VJMModel.extended, "--model", help="conventional (torsion only) or extended (3 springs per joint)"),
         json_out: str = typer.Option(None, "--json", help="write the result as JSON to OUT ('-' = stdout)"),
         make: bool = typer.Option(False, "--make-data", help="write DATA.csv from the case's own model (plan + verification set) and stop"),
-        noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection"),
+        noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection (serial robots)"),
+        noise_mm: float = typer.Option(0.02, "--noise-mm", help="HISS: translation noise sigma, mm (weights the fit, L = 1/sigma^2; added by --make-data)"),
+        noise_deg: float = typer.Option(0.02, "--noise-deg", help="HISS: rotation noise sigma, deg (as --noise-mm)"),
+        true_weights: str = typer.Option("table2-df", "--true-weights", help="HISS --make-data: W1..W11 as 11 numbers, or table2-df | table2-fd (seed 001 Table 2)"),
+        seed: int = typer.Option(0, "--seed", help="HISS: seed of --make-data and of the fit's restarts"),
+        restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
     ):
-        """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors."""
-        case = load_case_for(case_path, "identify", kinds=("serial_robot",))
+        """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
+        on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
+        case = load_case_for(case_path, "identify", kinds=("serial_robot", "parallel_vjm"))
+        if case.kind == "parallel_vjm":
+            from femcheck.cli._identify_hiss import identify_hiss
+            identify_hiss(case, case_path, data_path, json_out=json_out, make=make, noise_rel=noise,
+                          noise_mm=noise_mm, noise_deg=noise_deg, true_weights=true_weights, seed=seed,
+                          restarts=restarts)
+            return
         if make:
             import os
             if os.path.exists(data_path):

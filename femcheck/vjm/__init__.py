@@ -12,7 +12,12 @@ Modules, one concept each:
   of their compliances (seed 002 eqs. 9-12), with configurations scored by the condition number.
 * :mod:`~femcheck.vjm.parallel_vjm` -- leg stiffness from the bordered compliance matrix, legs summed (seed 001 eqs. 2-6).
 * :mod:`~femcheck.vjm.rcube_geometry` -- the (assumed) R-CUBE leg geometry of the HISS haptic device (seed 001 sec. 2).
-* :mod:`~femcheck.vjm.weight_fitting` -- K' = W K W^T model fitting with restarts and the linear fine-tuning (seed 001 sec. 3).
+* :mod:`~femcheck.vjm.weight_fitting` -- K' = W K W^T model fitting with restarts, identifiability and intervals,
+  and the linear fine-tuning and error statistics (seed 001 sec. 3, Tables 2-4).
+* :mod:`~femcheck.vjm.rcube_weight_model` -- the HISS platform twist as a function of the weights, with its exact Jacobian.
+* :mod:`~femcheck.vjm.hole_twist` -- platform twist from three measured holes (seed 001 sec. 4.2).
+* :mod:`~femcheck.vjm.hiss_pipeline` -- seed 001's measured-data workflow (CSV, twists, fits, Tables 2-4, virtual experiments).
+* :mod:`~femcheck.vjm.hiss_published` -- seed 001's Tables 2-4 as printed.
 
 Importing the package does no work.
 """

@@ -14,6 +14,9 @@ reproduces eq. 1 exactly (the case file repeats it):
   negative knee angle (seed 001 sec. 2.1).
 * h (``knee_plane_offset_m``) places the crank below the platform; 130 mm keeps every corner of the
   +-30 deg cube reachable (knee angle between about -21 and -152 deg).
+* Eq. 1 does not fix where the crank axis sits along e_j: ``A = S e_i + (S + c) e_j + (S - h) e_k`` keeps it for
+  any c (``crank_axis_offset_m``, default c = l1, the layout above). The layout search of docs/vjm.md varies
+  c and h.
 
 Link frames (where each link's 6x6 stiffness of the seed's Appendix acts): origin at the link's distal end,
 x along the link from its proximal to its distal joint, z along the joint axis at its proximal end (the
@@ -33,7 +36,7 @@ from femcheck.errors import UnreachablePoseError
 @dataclass(frozen=True)
 class RCubeGeometry:
     """Dimensions in m: crank ``l1``, coupler ``l2``, distal link ``l3``, platform cube edge ``d``,
-    ``knee_plane_offset_m`` h; ``active_limit_rad`` on |phi|."""
+    ``knee_plane_offset_m`` h; ``active_limit_rad`` on |phi|; ``crank_axis_offset_m`` c (None: c = l1)."""
 
     l1: float
     l2: float
@@ -41,6 +44,12 @@ class RCubeGeometry:
     d: float
     knee_plane_offset_m: float
     active_limit_rad: float = np.deg2rad(30.0)
+    crank_axis_offset_m: float | None = None
+
+    @property
+    def c(self) -> float:
+        """Crank axis offset along e_j from S, m (module doc)."""
+        return self.l1 if self.crank_axis_offset_m is None else self.crank_axis_offset_m
 
     @property
     def S(self) -> float:
@@ -106,7 +115,7 @@ def leg_poses(geom: RCubeGeometry, P, label: str = "P") -> LegPoses:
     knee = np.empty((3, m))
     for i in range(3):                                   # three legs; every line vectorized over m poses
         ei, ej, ek = E[i], E[(i + 1) % 3], E[(i + 2) % 3]
-        A = S * ei + (S + l1) * ej + (S - h) * ek
+        A = S * ei + (S + geom.c) * ej + (S - h) * ek
         ph = phi[:, i:i + 1]
         B = A + l1 * (np.sin(ph) * ei - np.cos(ph) * ej)
         # knee in the plane normal to e_i: 2R chain B -> C -> P
