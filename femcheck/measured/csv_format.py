@@ -170,16 +170,23 @@ def parse_measured_csv(text: str, source: str = "<memory>") -> MeasuredData:
         rotation=np.array(rows["rotation"], dtype=float) if has_r else None, meta=meta)
 
 
-def read_measured_csv(path) -> MeasuredData:
-    """Read and validate a measured-data CSV file (opened read-only; never modified)."""
+def read_data_text(path) -> str:
+    """The text of a measured-data file (read-only; a byte-order mark dropped); a missing, binary or directory
+    path raises :class:`MeasuredDataError` naming it."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        return p.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise MeasuredDataError(path, None, None, "file not found") from None
     except UnicodeDecodeError as exc:
         raise MeasuredDataError(path, None, None, f"not UTF-8 text ({exc.reason})") from None
-    return parse_measured_csv(text, str(path))
+    except IsADirectoryError:
+        raise MeasuredDataError(path, None, None, "is a directory; expected a CSV file") from None
+
+
+def read_measured_csv(path) -> MeasuredData:
+    """Read and validate a measured-data CSV file (opened read-only; never modified)."""
+    return parse_measured_csv(read_data_text(path), str(path))
 
 
 def format_measured_csv(point, direction, trial, phase, load_N, force, disp, resolution_m: float = 1e-5,

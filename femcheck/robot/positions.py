@@ -12,7 +12,6 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-from pathlib import Path
 
 import numpy as np
 
@@ -134,15 +133,8 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
 
 def read_marker_csv(path, marker_names, n_joints: int) -> MarkerPositions:
     """Read and validate a marker-position CSV (opened read-only)."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise MeasuredDataError(path, None, None, "file not found") from None
-    except UnicodeDecodeError as exc:
-        raise MeasuredDataError(path, None, None, f"not UTF-8 text ({exc.reason})") from None
-    except IsADirectoryError:
-        raise MeasuredDataError(path, None, None, "is a directory; expected a CSV file") from None
+    from femcheck.measured.csv_format import read_data_text
+    text = read_data_text(path)
     return parse_marker_csv(text, str(path), marker_names, n_joints)
 
 
