@@ -57,7 +57,7 @@ def main(argv=None) -> int:
             table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
         console.print(table)
         if hasattr(mod, "table"):  # an area's own summary table (e.g. solvers: ratios to the best)
-            console.print(mod.table(figures), markup=False)
+            console.print(mod.table(figures), markup=False, soft_wrap=True)
         write_text_atomic(out_dir / f"{mod.AREA}.json", json.dumps(figures, indent=2) + "\n")
         console.print(f"wrote {out_dir / (mod.AREA + '.json')}")
         if snapshot and mod.AREA in QUOTED_AREAS:
