@@ -36,6 +36,10 @@ Extraction. Approach δ = −Δ (both). Contact radius, three ways:
 
 Errors are signed, (FE − Hertz)/Hertz, %.
 
+Pin in bore (``pin_`` figures, :mod:`femcheck.bench._pin_bore`): a steel pin in a conforming bore with radial
+clearance, a plane-strain slice, the same mesh in both codes; pin displacement and contact half-angle compared
+code against code (no closed form), run only when ccx is present.
+
 Wall times are measured in the same process, one after the other, each on one thread (OPENBLAS_NUM_THREADS
 for femcheck; OMP_NUM_THREADS = CCX_NPROC_EQUATION_SOLVER = 1 for ccx); the CalculiX time is the ccx process
 alone (deck writing and result parsing excluded, reported apart). Without ``ccx`` on PATH the area reports
@@ -159,7 +163,7 @@ def hertz_deck(level: str = LEVEL, loads=None, penalty_factor: float | None = No
     parts.append("*SURFACE INTERACTION, NAME=SI\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n"
                  f"{cx.NUM.format(slope)}\n")
     parts.append("*CONTACT PAIR, INTERACTION=SI, TYPE=SURFACE TO SURFACE\nSSLAVE, SMASTER\n")
-    for i, F in enumerate(loads):
+    for F in loads:
         parts.append("*STEP, INC=200\n*STATIC\n1.0, 1.0, 1e-5, 1.0\n")
         parts.append("*BOUNDARY\n" + "".join(f"{n}, {d}, {d}, {cx.NUM.format(float(v))}\n" for n, d, v in far_field(F)))
         parts.append("*CLOAD\n" + f"{ref}, 3, {cx.NUM.format(-F / 4.0)}\n")
@@ -355,6 +359,41 @@ def run() -> dict:
     out["ccx_deck_and_parse_s"] = round(c["deck_s"] + c["parse_s"], 3)
     out["wall_ratio_ccx_over_femcheck"] = round(c["wall_s"] / out["femcheck_wall_s"], 3)
     out["wall_ratio_ccx_over_femcheck_sphere"] = round(c["wall_s"] / out["femcheck_sphere_wall_s"], 3)
+    out.update(run_pin())
+    return {k: v.item() if isinstance(v, np.generic) else v for k, v in out.items()}  # JSON: no numpy scalars
+
+
+def run_pin() -> dict:
+    """The pin-in-bore slice (:mod:`femcheck.bench._pin_bore`), femcheck then CalculiX: code against code."""
+    from femcheck.bench import _pin_bore as pb
+    from femcheck.fe import calculix as cx
+
+    out: dict = {"pin_problem": (f"steel pin R {1e3 * pb.R_PIN:g} mm in a bore with {1e6 * pb.CLEARANCE:g} um radial "
+                                 f"clearance, plane-strain slice {1e3 * pb.T:g} mm, half model")}
+    f = pb.run_femcheck()
+    try:
+        c = pb.run_ccx()
+    except cx.CcxError as e:
+        out["pin_ccx_status"] = f"failed: {str(e).splitlines()[0]}"
+        c = None
+    out["pin_dofs"] = int(f["dofs"])
+    for k, e in enumerate(f["loads"]):
+        F = int(e["force_N"])
+        out[f"pin_femcheck_displacement_um_{F}N"] = round(1e6 * e["delta_m"], 5)
+        out[f"pin_femcheck_contact_half_angle_deg_{F}N"] = round(e["theta_c_deg"], 3)
+        out[f"pin_femcheck_iterations_{F}N"] = e["iterations"]
+        if c is not None:
+            ec = c["loads"][k]
+            out[f"pin_ccx_displacement_um_{F}N"] = round(1e6 * ec["delta_m"], 5)
+            out[f"pin_ccx_contact_half_angle_deg_{F}N"] = round(ec["theta_c_deg"], 3)
+            out[f"pin_displacement_diff_pct_{F}N"] = _pct((e["delta_m"] - ec["delta_m"]) / ec["delta_m"])
+            out[f"pin_contact_half_angle_diff_pct_{F}N"] = _pct((e["theta_c_deg"] - ec["theta_c_deg"]) / ec["theta_c_deg"])
+            out[f"pin_ccx_contact_force_ratio_{F}N"] = round(ec["force_ratio"], 5)
+    out["pin_femcheck_wall_s"] = round(f["wall_s"], 3)
+    if c is not None:
+        out["pin_ccx_iterations"] = c["iterations"]
+        out["pin_ccx_wall_s"] = round(c["wall_s"], 3)
+        out["pin_wall_ratio_ccx_over_femcheck"] = round(c["wall_s"] / f["wall_s"], 3)
     return out
 
 
@@ -382,6 +421,16 @@ def table(figures: dict) -> str:
                     f"{figures['ccx_increments']} increments, {figures['ccx_iterations']} iterations")
     else:
         rows.append(f"\nCalculiX: {figures.get('ccx_status')}")
+    if "pin_ccx_wall_s" in figures:
+        rows += ["", f"Pin in bore ({figures['pin_problem']}), {figures['pin_dofs']} DOF, code against code:", "",
+                 "| load | Δ femcheck (µm) | Δ CalculiX (µm) | diff | θ_c femcheck (°) | θ_c CalculiX (°) | diff |",
+                 "|---|---|---|---|---|---|---|"]
+        for F in (int(k.rsplit("_", 1)[1][:-1]) for k in figures if k.startswith("pin_femcheck_displacement_um_")):
+            rows.append(f"| {F} N | {figures[f'pin_femcheck_displacement_um_{F}N']:.4f} | {figures[f'pin_ccx_displacement_um_{F}N']:.4f} | "
+                        f"{figures[f'pin_displacement_diff_pct_{F}N']:+.2f} % | {figures[f'pin_femcheck_contact_half_angle_deg_{F}N']:.2f} | "
+                        f"{figures[f'pin_ccx_contact_half_angle_deg_{F}N']:.2f} | {figures[f'pin_contact_half_angle_diff_pct_{F}N']:+.2f} % |")
+        rows.append(f"\nwall time: femcheck {figures['pin_femcheck_wall_s']:.1f} s, CalculiX {figures['pin_ccx_wall_s']:.1f} s "
+                    f"({figures['pin_wall_ratio_ccx_over_femcheck']:.2f}×)")
     return "\n".join(rows)
 
 
