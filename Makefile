@@ -32,7 +32,7 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -q
 
-## Throughput and solve-time measurements -> reports/bench/<area>.json
+## Throughput and solve-time measurements -> reports/bench/<area>.json (area calculix: side by side with CalculiX when ccx is on PATH, optional)
 bench: $(STAMP)
 	$(PY) -m femcheck.bench --snapshot
 
