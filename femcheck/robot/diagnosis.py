@@ -274,11 +274,16 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw)
     mm.align(nominal)
     say("calibrating the model as given (sensor frame, marker offsets, geometry)")
-    x_b, kept = calibrate(mm, nominal, work_sigma, progress=say)
+    x_b, kept0 = calibrate(mm, nominal, work_sigma, progress=say)
     lay = mm.layout
     f_b = mm.predict(x_b, nominal).ravel()
     Jn = mm.jacobian(x_b, nominal, base=f_b)
     kept, fixed, cond = identifiable_columns(Jn / work_sigma, lay.prior_sigma)
+    if set(kept) != set(kept0):
+        # the identifiable set seen at the calibrated point differs from the one at the start: calibrate those too
+        x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept, x0=x_b, progress=say)
+        f_b = mm.predict(x_b, nominal).ravel()
+        Jn = mm.jacobian(x_b, nominal, base=f_b)
     say("linearizing the elastic causes")
     E = mm.elastic_jacobian(x_b, nominal, base=f_b)
     reading_of_row = np.repeat(np.arange(data.n_readings), 3)
@@ -291,6 +296,7 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         return LinearRivals((data.xyz.ravel() - f_b) / sig, Jn[:, kept] / sig, P, p, E / sig, reading_of_row)
 
     lin = build(work_sigma)
+    lin_sigma = [work_sigma]
     # ---- the vocabulary: each cause in its best placement ------------------------------------------------
     lay_f = flat_layout(tree)
     n_data = 3 * data.n_readings
@@ -400,6 +406,48 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
                                             penalty=sum(penalty(pl) for pl in pls)))
         return out, singles
 
+    fin_k = lambda: np.isfinite(lay.prior_sigma[kept])
+    _refined: dict = {}
+
+    def refine(ids, iterations: int = 3):
+        """The explanation ``ids`` on the full nonlinear model (fixed-point passes, exact rotations): modified
+        Newton from its linear solution with the linearized Jacobian and the exact residual. Returns (nuisance x,
+        elastic params, cause parameters, chi^2 with the prior)."""
+        key = tuple(ids)
+        if key in _refined:
+            return _refined[key]
+        (delta, theta, _, _), cols = fit_combo(key, lin)
+        pls = placed[key]
+        B_all = np.hstack([c[0] for c in cols]) if cols else np.zeros((n_data, 0))
+        lb_all = np.concatenate([c[1] for c in cols]) if cols else np.zeros(0)
+        ub_all = np.concatenate([c[2] for c in cols]) if cols else np.zeros(0)
+
+        def elastic(theta):
+            inc = np.zeros(lay_f["mass_scale"].stop)
+            k0 = 0
+            for pl in pls:
+                for g, v in zip(pl.groups, theta[k0:k0 + pl.n_params]):
+                    inc[lay_f[pl.spec.flat].start + np.array(g)] += v
+                k0 += pl.n_params
+            return nominal.shifted(tree, inc)
+
+        x = x_b.copy()
+        x[kept] += delta
+        params = elastic(theta)
+        for _ in range(iterations):
+            f = mm.predict(x, params).ravel()
+            lin_k = LinearRivals((data.xyz.ravel() - f) / lin_sigma[0], lin.N, lin.P,
+                                 -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()], lin.E, reading_of_row)
+            d2, t2, _, _ = lin_k.fit(B_all, lb_all - theta, ub_all - theta, None)
+            x[kept] += d2
+            theta = theta + t2
+            params = elastic(theta)
+        f = mm.predict(x, params).ravel()
+        chi2 = float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()) + \
+            float(((x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()]) ** 2).sum())
+        _refined[key] = (x, params, theta, chi2)
+        return _refined[key]
+
     placed: dict[tuple, tuple] = {}
     say("fitting each cause in each placement; weighing none, singles and pairs")
     rv, singles = build_rivals(lin)
@@ -410,47 +458,60 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         warnings.append(f"sigma not stated and no repeated poses: sigma = {sigma * 1e3:.3f} mm from the residual of "
                         f"{richest.name}; state [measurement] sigma_m (or --sigma-mm) for a verdict that can say 'unexplained'")
         lin = build(sigma)
+        lin_sigma[0] = sigma
         rv, singles = build_rivals(lin)
+    # every rival's chi^2 on the full nonlinear model (its linearization around the calibrated point can be off
+    # by more than the noise when the causes move the geometry's best fit)
+    say("refitting every rival on the nonlinear model")
+    for e in rv:
+        log.debug("%s: linearized chi2 %.2f, nonlinear %.2f", e.name, e.chi2, refine(e.ids)[3])
+    rv = [dataclasses.replace(e, chi2=refine(e.ids)[3]) for e in rv]
+    # ---- cross-validation over poses: held-out residuals of any explanation -----------------------------------
+    say(f"{K}-fold cross-validation over poses" if data.fold is None else "cross-validation over the CSV's folds")
+    fold = _folds(data, K)
+    fold_of_row = np.repeat(fold[data.pose], 3)
+    _held: dict = {}
+
+    def heldout_residual(ids) -> np.ndarray:
+        """(R, 3) sigma-weighted held-out residuals of the explanation ``ids`` (every fold fitted on the others)."""
+        key = tuple(ids)
+        if key not in _held:
+            out = np.empty(n_data)
+            for f in np.unique(fold):
+                train = np.flatnonzero(fold_of_row != f)
+                test = np.flatnonzero(fold_of_row == f)
+                (d, th, _, _), cols = fit_combo(key, lin, train)
+                B = np.hstack([c[0] for c in cols]) if cols else np.zeros((n_data, 0))
+                out[test] = lin.predict_residual(d, th, B, test)
+            _held[key] = out.reshape(-1, 3)
+        return _held[key]
+
+    hchi2 = lambda ids: float((heldout_residual(ids) ** 2).sum())
     w = evidence.weigh(rv, n_data)
-    best = w.best
-    chosen = list(best.ids)
+    chosen = list(w.best.ids)
+    # a cause is named only if it also predicts poses it was not fitted on better: the leader gives way to a nested
+    # explanation (one cause fewer) whose held-out chi^2 is as low (an extra cause picked from many candidate
+    # places can win the BIC by chance; on held-out poses a chance fit does not help)
+    while chosen:
+        subs = [tuple(c for c in chosen if c != x) for x in chosen]
+        subs = [t for t in subs if t in placed]
+        if not subs:
+            break
+        sub = min(subs, key=hchi2)
+        if hchi2(sub) > hchi2(tuple(chosen)):
+            break
+        log.info("%s gives way to %s: held-out chi2 %.1f vs %.1f", "+".join(chosen), "+".join(sub) or "none",
+                 hchi2(tuple(chosen)), hchi2(sub))
+        chosen = list(sub)
+    if tuple(chosen) not in placed:
+        chosen = list(w.best.ids)
+    chosen = list(next(k for k in placed if set(k) == set(chosen)))
+    w = evidence.weigh(rv, n_data, chosen=tuple(chosen))
     # ---- after: the named explanation on the full nonlinear model ------------------------------------------
-    (delta, theta, chi2_lin, se), cols = fit_combo(chosen, lin)
-    x_a = x_b.copy()
-    x_a[kept] += delta
-    flat_inc = np.zeros(lay_f["mass_scale"].stop)
-    k0 = 0
-    chosen_pl = dict(zip(chosen, placed[tuple(chosen)]))
-    for cid, (B, lb, ub) in zip(chosen, cols):
-        pl = chosen_pl[cid]
-        for g, v in zip(pl.groups, theta[k0:k0 + pl.n_params]):
-            flat_inc[lay_f[pl.spec.flat].start + np.array(g)] += v
-        k0 += pl.n_params
-    params_a = nominal.shifted(tree, flat_inc)
-    if chosen:
-        B_all = np.hstack([c[0] for c in cols])
-        lb_all, ub_all = np.concatenate([c[1] for c in cols]), np.concatenate([c[2] for c in cols])
-        for _ in range(3):   # modified Newton: fixed (linearized) Jacobian, exact nonlinear residual
-            f_a = mm.predict(x_a, params_a).ravel()
-            r_now = (data.xyz.ravel() - f_a) / sigma
-            lin_a = LinearRivals(r_now, lin.N, lin.P, -x_a[kept][np.isfinite(lay.prior_sigma[kept])] /
-                                 lay.prior_sigma[kept][np.isfinite(lay.prior_sigma[kept])], lin.E, reading_of_row)
-            d2, t2, _, _ = lin_a.fit(B_all, lb_all - theta, ub_all, None)
-            x_a[kept] += d2
-            theta = theta + t2
-            inc = np.zeros_like(flat_inc)
-            k0 = 0
-            for cid in chosen:
-                pl = chosen_pl[cid]
-                for g, v in zip(pl.groups, theta[k0:k0 + pl.n_params]):
-                    inc[lay_f[pl.spec.flat].start + np.array(g)] += v
-                k0 += pl.n_params
-            params_a = nominal.shifted(tree, inc)
+    x_a, params_a, theta, chi2_after = refine(tuple(chosen))
     f_a = mm.predict(x_a, params_a).ravel()
-    chi2_after = float((((data.xyz.ravel() - f_a) / sigma) ** 2).sum()) + float(
-        ((x_a[kept][np.isfinite(lay.prior_sigma[kept])] / lay.prior_sigma[kept][np.isfinite(lay.prior_sigma[kept])]) ** 2).sum())
-    # the nonlinear refit is at least as good as its linearization: use it for the named explanation's goodness
-    rv = [dataclasses.replace(e, chi2=min(e.chi2, chi2_after)) if set(e.ids) == set(chosen) else e for e in rv]
+    chosen_pl = dict(zip(chosen, placed[tuple(chosen)]))
+    (_, _, _, se), _ = fit_combo(tuple(chosen), lin)     # standard errors from the linearization (95 % = 1.96 se)
     w = evidence.weigh(rv, n_data, chosen=tuple(chosen))
     # ---- residual shape: by marker, drift over the measurement order ------------------------------------------
     res_a = (data.xyz - f_a.reshape(-1, 3))
@@ -509,20 +570,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         causes = [{"id": "none", "probability": float(prob.get((), 0.0)), "params": {}, "params_ci": {},
                    "location": "", "placement": "", "joints": []}]
     # ---- held-out errors and the leave-one-group-out table -------------------------------------------------
-    say(f"{K}-fold cross-validation over poses" if data.fold is None else "cross-validation over the CSV's folds")
-    fold = _folds(data, K)
-    fold_of_row = np.repeat(fold[data.pose], 3)
-
     def heldout(ids) -> np.ndarray:
-        err = np.empty(data.n_readings)
-        for f in np.unique(fold):
-            train = np.flatnonzero(fold_of_row != f)
-            test = np.flatnonzero(fold_of_row == f)
-            (d, th, _, _), cols = fit_combo(ids, lin, train)
-            B = np.hstack([c[0] for c in cols]) if cols else np.zeros((n_data, 0))
-            r = lin.predict_residual(d, th, B, test).reshape(-1, 3) * sigma
-            err[np.flatnonzero(fold[data.pose] == f)] = np.linalg.norm(r, axis=1)
-        return err * 1e3
+        """Held-out marker errors (R,) mm of an explanation: each fold refitted on the other poses."""
+        return np.linalg.norm(heldout_residual(ids), axis=1) * sigma * 1e3
 
     e_before = heldout(())
     e_after = heldout(tuple(chosen)) if chosen else e_before
