@@ -318,6 +318,10 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
     top = [i for i in range(len(ex)) if i < min(max(n_top, 2), max(rivals, 2))
            and (i < 2 or prob[i] >= MIN_RIVAL_PROBABILITY)]
     K = len(top)
+    missing = [ex[i].name for i in top if ex[i].payload is None]
+    if missing:
+        raise ValueError(f"plan_measurements needs each rival's fit (Explanation.payload); {missing[0]} has none: "
+                         "weigh the FitResults of femcheck.diagnose.selection.fit_rivals")
     n_old = int(weighing.n_data)
     bic_old = np.array([e.chi2 + e.n_params * np.log(n_old) for e in ex])
     kpar = np.array([e.n_params for e in ex], float)
