@@ -418,6 +418,9 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
              "posteriors are over them",
              "off-cube pose ids (Q...) are not P0..P8: `femcheck diagnose` reads them only with a pose table "
              "(femcheck.measured.process(..., pose_table=plan.pose_table()))")
+    if prob[0] >= 0.99:
+        notes += (f"the leading explanation already holds {prob[0]:.3f} of the posterior: these measurements "
+                  "confirm more than they separate",)
     return Plan(measurements=tuple(measurements), rivals=rivals_out, objective_before=obj_before,
                 objective_after=float(obj_after[0]),
                 expected_log_bayes_factor_top2=float(lnB[0, 0, top[1]]) if K > 1 else float("inf"),
