@@ -151,6 +151,14 @@ def markdown(result: dict, command: str) -> str:
             else:
                 out.append(f"| {b['lo']:.1f}–{b['hi']:.1f} | 0 | – | – | – |")
         out.append("")
+    wrong = [(s, ids, p) for s in result["sets"] for ids, p in s.explanations
+             if p >= 0.9 and ids != tuple(sorted(s.hidden))]
+    if wrong:
+        out += ["**explanations given >= 0.9 that were wrong**", "", "| set | hidden | shrink | points | directions | "
+                "named | probability |", "|---|---|---|---|---|---|---|"]
+        out += [f"| {s.seed} | {'+'.join(s.hidden) or 'none'} | {s.shrink:.2f} | {' '.join(s.points)} | "
+                f"{' '.join(s.directions)} | {'+'.join(ids) or 'none'} | {p:.3f} |" for s, ids, p in wrong]
+        out.append("")
     return "\n".join(out)
 
 
