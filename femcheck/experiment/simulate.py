@@ -136,6 +136,7 @@ def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level
              "source": model.name, "seed": seed,
              "effects": truth_effects or [{"id": "none", "params": {}, "location": ""}],
              "noise_sigma_m": sigma, "dial_resolution_m": res, "trials": int(trials or case.measurement.trials),
-             "directions": list(directions), "sweep": bool(sweep)}
+             "directions": list(directions) if rows is None else sorted(set(map(str, direction))),
+             "sweep": bool(sweep) if rows is None else bool(np.any(phase == "sweep"))}
     log.debug("virtual experiment: %d readings, hidden %s", n, [e["id"] for e in truth["effects"]])
     return VirtualExperiment(data=data, csv_text=text, truth=truth)
