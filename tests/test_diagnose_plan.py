@@ -13,8 +13,8 @@ from femcheck.diagnose import AnalyticalChainModel, diagnose, predict_readings
 from femcheck.diagnose.effects import get_effect
 from femcheck.diagnose.evidence import AMBIGUITY_RATIO
 from femcheck.diagnose.fitting import fit_effects
-from femcheck.diagnose.plan import (candidate_poses, measurement_states, plan_measurements, separation,
-                                    unit_directions)
+from femcheck.diagnose.plan import (candidate_poses, measurement_states, plan_measurements, read_pose_table,
+                                    separation, unit_directions)
 from femcheck.experiment.simulate import simulate
 from femcheck.kinematics.conditioning import pose_conditioning
 from femcheck.kinematics.directions import direction_unit
@@ -155,7 +155,33 @@ def test_plan_cli_json_and_bad_input(setting, tmp_path, capsys):
     assert set(m) >= {"pose_id", "x_mm", "y_mm", "z_mm", "direction", "ux", "uy", "uz", "load_N"}
     assert {"criterion", "criterion_value", "expected_posterior_leader", "expected_cause_probability_leader",
             "rivals", "plan_wall_s", "verdict"} <= set(j)
+    # carry the plan out (simulated) and diagnose the joined readings with the plan's JSON as the pose table
+    case = femcheck.load_case(CASE)
+    table = read_pose_table(out, case)
+    rows = [(mm["pose_id"], f"plan{k + 1}", t, ph, load, load * np.array([mm["ux"], mm["uy"], mm["uz"]]))
+            for t in (1, 2, 3) for k, mm in enumerate(j["measurements"])
+            for ph, load in (("preload", 5.0), ("total", 5.0 + mm["load_N"]), ("unload", 5.0), ("unload", 0.0))]
+    cols = list(zip(*rows))
+    follow = simulate(case, [TRUTH], seed=11, rows=(np.array(cols[0], dtype=object), np.array(cols[1], dtype=object),
+                                                    np.array(cols[2], int), np.array(cols[3], dtype=object),
+                                                    np.array(cols[4], float), np.array(cols[5], float)),
+                      pose_table=table).data
+    both = concat_measured(sparse, follow)
+    joined = tmp_path / "joined.csv"
+    joined.write_text(format_measured_csv(both.point, both.direction, both.trial, both.phase, both.load_N, both.force,
+                                          both.disp))
+    off_cube = [mm["pose_id"] for mm in j["measurements"] if not mm["pose_id"].startswith("P")]
+    if off_cube:
+        assert main(["diagnose", CASE, str(joined)]) == 2           # an off-cube id without its pose table
+        assert off_cube[0] in capsys.readouterr().err
+    dj = tmp_path / "d.json"
+    assert main(["diagnose", CASE, str(joined), "--pose-table", str(out), "--json", str(dj)]) == 0
+    assert json.loads(dj.read_text())["residual"]["n_data"] == 3 * 4 * (len(SPARSE_POINTS) + BUDGET)
     assert main(["plan", CASE, str(csv), "--effects", "no_such_effect"]) == 2
     assert "no_such_effect" in capsys.readouterr().err
     assert main(["plan", CASE, str(tmp_path / "missing.csv")]) == 2
     assert main(["plan", CASE, str(csv), "--json", str(csv)]) == 2
+    bad = tmp_path / "bad_plan.json"
+    bad.write_text('{"measurements": [{"pose_id": "Q1", "x_mm": 400, "y_mm": 0, "z_mm": 375}]}')
+    assert main(["diagnose", CASE, str(joined), "--pose-table", str(bad)]) == 2
+    assert "unreachable" in capsys.readouterr().err

@@ -24,6 +24,8 @@ def register(app: typer.Typer) -> None:
         rivals: int = typer.Option(5, "--rivals", min=2, max=10, help="most rival explanations to separate"),
         max_condition: float = typer.Option(None, "--max-condition", help="cond(J_h) limit of a planned pose (default 10)"),
         seed: int = typer.Option(0, "--seed", help="seed of the scrambled Sobol' pose sample"),
+        pose_table: Optional[str] = typer.Option(None, "--pose-table", metavar="PLAN.json",
+                                                 help="pose table for point ids other than P0..P8: an earlier plan's JSON"),
     ):
         """Diagnose DATA.csv, take the top rival explanations (posterior-weighted) and propose the N measurements
         (pose in the reachable workspace, load direction, load level) that best separate them, with the expected
@@ -50,7 +52,11 @@ def register(app: typer.Typer) -> None:
                 raise typer.BadParameter(f"--effects: {bad[0] if bad else effects!r} is not an effect; expected ids from "
                                          f"{', '.join(sorted(k for k in reg if k != 'none'))}")
         case = load_case_for(case_path, "plan")
-        readings = process(read_measured_csv(measured), case)
+        table = None
+        if pose_table:
+            from femcheck.diagnose.plan import read_pose_table
+            table = read_pose_table(pose_table, case)
+        readings = process(read_measured_csv(measured), case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         d = diagnose(m, readings, candidates=pool, with_baseline=False)
         p = plan_measurements(m, readings, d.weighing, budget=budget, n_poses=poses, rivals=rivals, seed=seed,

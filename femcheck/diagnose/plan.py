@@ -218,7 +218,8 @@ class PlannedMeasurement:
 
     def as_dict(self) -> dict:
         x, y, z = (float(v) * 1e3 for v in self.pose[:3])
-        return {"pose_id": self.pose_id, "x_mm": round(x, 2), "y_mm": round(y, 2), "z_mm": round(z, 2),
+        rx, ry, rz = (float(v) for v in self.pose[3:])
+        return {"pose_id": self.pose_id, "x_mm": x, "y_mm": y, "z_mm": z, "rx_rad": rx, "ry_rad": ry, "rz_rad": rz,
                 "direction": self.direction_label, "ux": round(float(self.direction[0]), 4),
                 "uy": round(float(self.direction[1]), 4), "uz": round(float(self.direction[2]), 4),
                 "preload_N": self.preload_N, "load_N": self.load_N, "total_N": self.preload_N + self.load_N,
@@ -416,8 +417,8 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
              "the expected posteriors assume the rival's fitted parameters are the truth and refit the others linearly; "
              f"rivals: the {K} leading explanations ({100 * float(prob[top].sum()):.1f} % of the posterior); expected "
              "posteriors are over them",
-             "off-cube pose ids (Q...) are not P0..P8: `femcheck diagnose` reads them only with a pose table "
-             "(femcheck.measured.process(..., pose_table=plan.pose_table()))")
+             "off-cube pose ids (Q...) are not P0..P8: diagnose readings taken there with `femcheck diagnose CASE "
+             "DATA.csv --pose-table PLAN.json` (this plan's --json; the ids are stable for the same --seed)")
     if prob[0] >= 0.99:
         notes += (f"the leading explanation already holds {prob[0]:.3f} of the posterior: these measurements "
                   "confirm more than they separate",)
@@ -429,3 +430,41 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
                 expected_cause_probability_leader=lead_causes, rival_mass=float(prob[top].sum()),
                 sigma_state_m=sigma_state, trials=trials, n_candidate_poses=P, n_candidates=n_c,
                 load_levels_N=levels, max_condition=float(max_condition), wall_s=time.perf_counter() - t0, notes=notes)
+
+
+def read_pose_table(path, case) -> dict[str, np.ndarray]:
+    """{pose id: (6,) pose} from a plan's JSON (``femcheck plan --json``: its ``measurements``, each with ``pose_id``,
+    ``x_mm``, ``y_mm``, ``z_mm`` and ``rx_rad``, ``ry_rad``, ``rz_rad``), so that readings taken at a plan's off-cube
+    poses can be diagnosed. Every pose must be reachable (:class:`~femcheck.errors.UnreachablePoseError` names it);
+    any other problem is a :class:`~femcheck.errors.MeasuredDataError` naming the file and the key."""
+    import json
+    from pathlib import Path
+
+    from femcheck.errors import MeasuredDataError
+    from femcheck.kinematics.psu6 import leg_geometry
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise MeasuredDataError(path, None, None, f"not a plan JSON ({exc}); expected the file of `femcheck plan "
+                                "--json`") from None
+    rows = doc.get("measurements") if isinstance(doc, dict) else None
+    if not isinstance(rows, list) or not rows:
+        raise MeasuredDataError(path, None, "measurements", "missing or empty; expected the file of `femcheck plan --json`")
+    table: dict[str, np.ndarray] = {}
+    for k, m in enumerate(rows):
+        try:
+            pid = str(m["pose_id"])
+            pose = np.array([m["x_mm"] * 1e-3, m["y_mm"] * 1e-3, m["z_mm"] * 1e-3,
+                             m.get("rx_rad", 0.0), m.get("ry_rad", 0.0), m.get("rz_rad", 0.0)], float)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise MeasuredDataError(path, None, f"measurements[{k}]", f"lacks or mangles {exc}; expected pose_id, "
+                                    "x_mm, y_mm, z_mm (and rx_rad, ry_rad, rz_rad)") from None
+        if not np.all(np.isfinite(pose)):
+            raise MeasuredDataError(path, None, f"measurements[{k}]", f"pose {pid} is not finite")
+        if pid in table and not np.allclose(table[pid], pose, atol=1e-9):
+            raise MeasuredDataError(path, None, f"measurements[{k}]", f"pose id {pid} names two different poses")
+        table[pid] = pose
+    ids = list(table)
+    leg_geometry(case, np.array([table[i] for i in ids]), labels=ids)      # raises UnreachablePoseError
+    return table
