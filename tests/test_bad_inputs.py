@@ -80,6 +80,13 @@ CASES = [
     ("coverage_of_serial_robot", ["coverage", "{d}/irb120.toml"], 2, "meta.kind", None),
     ("coverage_json_unwritable", ["coverage", "{d}/haptic_6psu.toml", "--json", "{d}/a_file/c.json"], 2, "--json", None),
     ("identify_of_6psu", ["identify", "{d}/haptic_6psu.toml", "{d}/measured.csv"], 2, "meta.kind", None),
+    ("plan_of_serial_robot", ["plan", "{d}/irb120.toml", "{d}/measured.csv"], 2, "meta.kind", None),
+    ("plan_unknown_effect", ["plan", "{d}/haptic_6psu.toml", "{d}/measured.csv", "--effects", "bogus", "--json",
+                             "{d}/p0.json"], 2, "bogus", "{d}/p0.json"),
+    ("plan_budget_zero", ["plan", "{d}/haptic_6psu.toml", "{d}/measured.csv", "--budget", "0"], 2, "--budget", None),
+    ("plan_max_condition_1", ["plan", "{d}/haptic_6psu.toml", "{d}/measured.csv", "--max-condition", "1"], 2,
+     "--max-condition", None),
+    ("plan_missing_column", ["plan", "{d}/haptic_6psu.toml", "{d}/no_column.csv"], 2, "dz_mm", None),
     ("unknown_linear_solver", ["--linear-solver", "bogus", "stiffness", "{d}/haptic_6psu.toml"], 2, "bogus", None),
 ]
 

@@ -10,7 +10,10 @@ Figures:
 * ``same_model_named_right_rate``: share of in-vocabulary single-effect datasets (every effect, random
   magnitude and place, ``SEEDS`` seeds) whose first named cause is the hidden one;
 * ``same_model_unexplained_rate``: share of those that get ``unexplained`` (false alarms);
-* ``noise_6um_unexplained_rate``: the same single-effect sets with twice the case's noise.
+* ``noise_6um_unexplained_rate``: the same single-effect sets with twice the case's noise;
+* ``plan_wall_s``: wall time of ``femcheck plan``'s work on the timed dataset above (the diagnosis with every pair,
+  then :func:`femcheck.diagnose.plan.plan_measurements`, budget 3, 120 sampled poses); ``plan_only_s`` the plan
+  step alone, ``plan_candidates`` the number of candidate measurements it weighs.
 """
 from __future__ import annotations
 
@@ -34,9 +37,14 @@ def run() -> dict:
     model = AnalyticalChainModel(case, "detailed", "rigid")
     r = process(simulate(case, [("actuation_compliance", {"scale": 1.8})], seed=1).data, case)
     t0 = time.perf_counter()
-    diagnose(model, r, with_baseline=False)
+    d = diagnose(model, r, with_baseline=False)
     t_all = time.perf_counter() - t0
     out = {"diagnose_9pt_all_pairs_s": round(t_all, 2)}
+    from femcheck.diagnose.plan import plan_measurements
+    t1 = time.perf_counter()
+    p = plan_measurements(model, r, d.weighing, budget=3)
+    t_plan = time.perf_counter() - t1
+    out.update(plan_wall_s=round(t_all + t_plan, 2), plan_only_s=round(t_plan, 2), plan_candidates=p.n_candidates)
     verdicts = []
     for fid in FOREIGN:
         for s in range(SEEDS):

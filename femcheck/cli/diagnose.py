@@ -26,6 +26,8 @@ def register(app: typer.Typer) -> None:
                                        "default: the case's measurement.sigma_m, else repeated poses"),
         folds: int = typer.Option(None, "--folds", min=2, help="serial robots: K of the K-fold cross-validation "
                                   "(default: the case's measurement.folds; the CSV's fold column wins)"),
+        pose_table: str = typer.Option(None, "--pose-table", metavar="PLAN.json",
+                                  help="pose table for point ids other than P0..P8: the JSON of `femcheck plan`"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -46,7 +48,11 @@ def register(app: typer.Typer) -> None:
             if out:
                 refuse_input_overwrite(out, [case_path, measured])
         data = read_measured_csv(measured)
-        readings = process(data, case)
+        table = None
+        if pose_table:
+            from femcheck.diagnose.plan import read_pose_table
+            table = read_pose_table(pose_table, case)
+        readings = process(data, case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         mismatch = device_mismatch_warnings(case, data.meta, readings, m)
         d = diagnose(m, readings, max_effects=max_effects)

@@ -82,13 +82,16 @@ def protocol_rows(case, directions=ALL_DIRECTIONS, trials: int | None = None, sw
 def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level: str = "detailed",
              joints: str | None = None, trials: int | None = None, sweep: bool = True,
              noise_sigma_m: float | None = None, resolution_m: float | None = None,
-             model=None) -> VirtualExperiment:
+             model=None, rows=None, pose_table=None) -> VirtualExperiment:
     """Simulate the protocol with hidden effects.
 
     hidden: sequence of (effect id, {param: value}); an empty dict draws a random magnitude and location
     (``Effect.sample_truth``) from the seeded generator. ``model``: the reading model the data come from
     (default the analytical chain of ``level`` and ``joints``; e.g. the device FE with contact joints,
-    :class:`femcheck.diagnose.fe_model.DeviceFEReadingModel`). Returns a :class:`VirtualExperiment`.
+    :class:`femcheck.diagnose.fe_model.DeviceFEReadingModel`). ``rows``: the reading sequence to simulate instead
+    of the protocol's, as (point, direction, trial, phase, load_N, force) like :func:`protocol_rows` (e.g. a plan's,
+    :meth:`femcheck.diagnose.plan.Plan.protocol_rows`), with ``pose_table`` {pose id: (6,) pose} for points other
+    than P0..P8. Returns a :class:`VirtualExperiment`.
     """
     rng = np.random.default_rng(seed)
     joints = joints or case.model.joint_rotations
@@ -111,11 +114,11 @@ def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level
         vals.append(v)
         truth_effects.append({"id": eff.id, "params": dict(zip(eff.param_names, map(float, v))),
                               "location": eff.location(v, None, None)})
-    point, direction, trial, phase, load, force = protocol_rows(case, directions, trials, sweep)
+    point, direction, trial, phase, load, force = protocol_rows(case, directions, trials, sweep) if rows is None else rows
     n = len(point)
     noiseless = MeasuredData(source="<virtual experiment>", point=point, direction=direction, trial=trial, phase=phase,
                              load_N=load, force=force, disp=np.zeros((n, 3)), row=np.arange(2, n + 2))
-    states = process(noiseless, case)
+    states = process(noiseless, case, pose_table)
     true_state = predict_readings(model, states, effs, vals)
     key = {k: i for i, k in enumerate(zip(states.point, states.direction, states.phase, np.round(states.load_N, 6)))}
     # rows -> states (process() keys states by point, direction, phase, load)
@@ -133,6 +136,7 @@ def simulate(case, hidden=(), *, seed: int = 0, directions=ALL_DIRECTIONS, level
              "source": model.name, "seed": seed,
              "effects": truth_effects or [{"id": "none", "params": {}, "location": ""}],
              "noise_sigma_m": sigma, "dial_resolution_m": res, "trials": int(trials or case.measurement.trials),
-             "directions": list(directions), "sweep": bool(sweep)}
+             "directions": list(directions) if rows is None else sorted(set(map(str, direction))),
+             "sweep": bool(sweep) if rows is None else bool(np.any(phase == "sweep"))}
     log.debug("virtual experiment: %d readings, hidden %s", n, [e["id"] for e in truth["effects"]])
     return VirtualExperiment(data=data, csv_text=text, truth=truth)

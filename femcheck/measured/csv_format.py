@@ -209,3 +209,17 @@ def write_measured_csv(path, *args, **kw) -> Path:
     """Write :func:`format_measured_csv` atomically to ``path``."""
     from femcheck.report.atomic import write_text_atomic
     return write_text_atomic(path, format_measured_csv(*args, **kw))
+
+
+def concat_measured(*parts: MeasuredData, source: str | None = None) -> MeasuredData:
+    """The rows of several measured datasets as one (e.g. a campaign and the follow-up a plan asked for).
+    Optional moment / rotation columns are kept only when every part has them; ``row`` is renumbered."""
+    if not parts:
+        raise ValueError("concat_measured needs at least one dataset")
+    cat = lambda f: np.concatenate([getattr(p, f) for p in parts])
+    opt = lambda f: cat(f) if all(getattr(p, f) is not None for p in parts) else None
+    n = sum(len(p) for p in parts)
+    return MeasuredData(source=source or " + ".join(p.source for p in parts), point=cat("point"),
+                        direction=cat("direction"), trial=cat("trial"), phase=cat("phase"), load_N=cat("load_N"),
+                        force=cat("force"), disp=cat("disp"), row=np.arange(2, n + 2), moment=opt("moment"),
+                        rotation=opt("rotation"), meta=dict(parts[0].meta))

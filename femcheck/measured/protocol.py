@@ -111,7 +111,8 @@ def resolve_poses(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | 
     for i, p in enumerate(data.point):
         if p not in table:
             raise data.error(i, "point", f"{p!r} is not P0..P8 and not a pose id of the case "
-                             f"(known: {', '.join(sorted(table))})")
+                             f"(known: {', '.join(sorted(table))}; readings at a plan's poses need its JSON: "
+                             "--pose-table PLAN.json)")
         out[i] = table[p]
     return out
 

@@ -1,0 +1,40 @@
+"""The reliability table of ``femcheck.bench.calibration`` (issue 15 item 2) on outcomes whose calibration is known."""
+import numpy as np
+import pytest
+
+import femcheck
+from femcheck.bench.calibration import reliability, shrunk_truth
+from femcheck.diagnose import AnalyticalChainModel
+from femcheck.diagnose.effects import get_effect
+
+
+def test_calibrated_outcomes_give_a_small_calibration_error():
+    rng = np.random.default_rng(0)
+    p = rng.uniform(0, 1, 20000)
+    r = reliability(p, rng.uniform(0, 1, p.size) < p)
+    # a calibrated forecaster: each bin's observed frequency within 4 binomial standard errors of its mean
+    for b in r["bins"]:
+        assert abs(b["observed"] - b["mean_predicted"]) < 4 * b["observed_se"] + 1e-9
+    assert r["ece"] < 0.02 and r["n"] == p.size
+    # Brier score of a calibrated forecaster with p ~ U(0, 1): E[p (1 - p)] = 1/6
+    assert r["brier"] == pytest.approx(1 / 6, abs=0.01)
+
+
+def test_overconfident_outcomes_are_flagged():
+    p = np.full(1000, 0.95)
+    r = reliability(p, np.arange(1000) < 500)          # right half the time
+    top = r["bins"][-1]
+    assert top["n"] == 1000 and top["observed"] == pytest.approx(0.5) and r["ece"] == pytest.approx(0.45)
+
+
+def test_shrunk_truth_moves_towards_the_neutral_value():
+    case = femcheck.load_case("cases/haptic_6psu.toml")
+    model = AnalyticalChainModel(case)
+    eff = get_effect("actuation_compliance")
+    full = shrunk_truth(eff, model, np.random.default_rng(3), case, 1.0)["scale"]
+    half = shrunk_truth(eff, model, np.random.default_rng(3), case, 0.5)["scale"]
+    assert half == pytest.approx(1.0 + 0.5 * (full - 1.0))     # linear parameter, neutral 1 in the detailed model
+    eff = get_effect("link_modulus")                          # log parameter: halfway in log10
+    full = shrunk_truth(eff, model, np.random.default_rng(4), case, 1.0)["E_factor"]
+    half = shrunk_truth(eff, model, np.random.default_rng(4), case, 0.5)["E_factor"]
+    assert half == pytest.approx(np.sqrt(full))
