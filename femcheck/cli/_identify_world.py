@@ -78,6 +78,8 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
                        "error_verification_pct": summ[k]["verification"],
                        "error_random_pct": summ[k]["random"],
                        "error_table1_pct": summ[k]["table1_all"],
+                       "error_norm_verification_pct": st.summary(f, norm=True)["verification"],
+                       "error_norm_table1_pct": st.summary(f, norm=True)["table1_all"],
                        "torsion_share": _share_stats(f.torsion_share[table1, 0], lab1)}
                    for k, f in st.fits.items()},
         "world_torsion_share": _share_stats(st.world_torsion_share[table1, 0], lab1),
@@ -115,6 +117,9 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         if summ["conventional"][key]["mean"] is None:
             continue
         lines.append(f"  {name:<22} conventional {_fmt_pct(summ['conventional'][key])}; extended {_fmt_pct(summ['extended'][key])}")
+    nc, ne = (out["models"][k]["error_norm_table1_pct"]["mean"] for k in ("conventional", "extended"))
+    lines.append(f"  error of the magnitude ||dx_model| - |dx|| / |dx|, all Table I tests: conventional {nc:.2f} % mean; "
+                 f"extended {ne:.2f} % mean")
     ratio = summ["extended"]["table1_all"]["mean"] / summ["conventional"]["table1_all"]["mean"]
     lines.append(f"  extended / conventional, mean over all Table I tests: {ratio:.3f}")
     lines.append("  seed 002 (SHIR5, its FE model): mean 7.75 % conventional, 3.74 % extended (ratio 0.48); "

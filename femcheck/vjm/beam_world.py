@@ -236,6 +236,14 @@ def _self_weight(world: BeamWorld, lay: _Layout) -> np.ndarray:
     return f.ravel()
 
 
+def arm_mass_kg(world: BeamWorld) -> float:
+    """Mass of the arm (tubes, tool and drives), kg; independent of the configuration."""
+    lay = _layout(world, forward_kinematics(world.chain, np.zeros((1, world.chain.n_joints))), 0)
+    tubes = sum(t.density_kg_m3 * t.section.A * np.linalg.norm(lay.nodes[el[:, 1]] - lay.nodes[el[:, 0]], axis=1).sum()
+                for el, t in lay.segments)
+    return float(tubes + sum(b.mass_kg for b in world.bearings))
+
+
 @dataclass(frozen=True)
 class WorldDeflections:
     """TCP deflections of a :class:`BeamWorld`: ``twist`` (m, p, 6) [dx, dy, dz, rx, ry, rz] in m and rad
