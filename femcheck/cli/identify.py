@@ -1,6 +1,11 @@
 """``femcheck identify``: joint compliances of a serial robot from measured tool deflections (seed 002 eqs. 9-12),
 or, on a ``parallel_vjm`` case (HISS), seed 001's weight fit with its Tables 2-4 (``femcheck.vjm.hiss_pipeline``).
 
+With ``--world beam`` (serial robot) no DATA.csv is read: femcheck's beam-FE world
+(``femcheck.vjm.beam_world``) makes the measurements, both models are identified and compared with seed 002's
+published errors (``femcheck.cli._identify_world``); with ``--make-data`` the world's measurements are written
+as DATA.csv instead.
+
 DATA.csv: header ``set,q1..qn,fx,fy,fz,mx,my,mz,dx,dy,dz``; ``set`` is ``identification`` or ``verification``;
 q in deg, wrench in N and N m at the tool point (base frame), deflection in m. Partial: no confidence
 intervals beyond the classical LS standard error (1.96 s), kappa_inv uses the
@@ -49,9 +54,11 @@ def read_data(path: str, n: int):
     return sets, np.deg2rad(num[:, :n]), num[:, n:n + 6], num[:, n + 6:]
 
 
-def make_data(case, path: str, noise_rel: float = 0.0, seed: int = 0) -> int:
+def make_data(case, path: str, noise_rel: float = 0.0, seed: int = 0, world=None, noise_mm: float = 0.0) -> int:
     """Write DATA.csv from the case's own VJM (identification plan + verification set, every wrench at every
-    configuration), optional Gaussian noise of ``noise_rel`` times each deflection's norm. Returns the rows."""
+    configuration), optional Gaussian noise of ``noise_rel`` times each deflection's norm. ``world`` (a
+    :class:`femcheck.vjm.beam_world.BeamWorld`) makes the deflections instead of the VJM; ``noise_mm`` adds
+    Gaussian noise of that sigma (mm) to each component. Returns the rows."""
     from femcheck.vjm.serial_vjm import deflect
     p = case.identification
     if p is None:
@@ -60,9 +67,15 @@ def make_data(case, path: str, noise_rel: float = 0.0, seed: int = 0) -> int:
     nw = len(p.wrenches)
     qdeg = np.vstack([np.repeat(qid, nw, 0), np.repeat(qver, nw, 0)])
     W = np.tile(np.array(p.wrenches), (len(qid) + len(qver), 1))
-    dX = deflect(case.vjm(), np.deg2rad(qdeg), W, complementary=False).twist[:, :3]
+    if world is None:
+        dX = deflect(case.vjm(), np.deg2rad(qdeg), W, complementary=False).twist[:, :3]
+    else:
+        from femcheck.vjm.beam_world import tcp_deflections
+        q = np.deg2rad(np.vstack([qid, qver]))
+        dX = tcp_deflections(world, q, np.array(p.wrenches)).twist[:, :, :3].reshape(-1, 3)
     rng = np.random.default_rng(seed)
     dX = dX + noise_rel * np.linalg.norm(dX, axis=1, keepdims=True) * rng.standard_normal(dX.shape) / np.sqrt(3)
+    dX = dX + 1e-3 * noise_mm * rng.standard_normal(dX.shape)
     n = case.n_joints
     lines = [",".join(["set"] + [f"q{j + 1}" for j in range(n)] + ["fx", "fy", "fz", "mx", "my", "mz", "dx", "dy", "dz"])]
     for i in range(len(qdeg)):
@@ -82,21 +95,36 @@ def register(app: typer.Typer) -> None:
     @app.command("identify")
     def identify_cmd(
         case_path: str = typer.Argument(..., metavar="CASE", help="serial_robot or parallel_vjm case file (TOML), e.g. cases/cobot7.toml, cases/hiss.toml"),
-        data_path: str = typer.Argument(..., metavar="DATA.csv", help="measurements (format in the module doc / docs/vjm.md)"),
+        data_path: str = typer.Argument(None, metavar="[DATA.csv]", help="measurements (format in the module doc / docs/vjm.md); not used with --world unless --make-data"),
         model: VJMModel = typer.Option(VJMModel.extended, "--model", help="conventional (torsion only) or extended (3 springs per joint)"),
         json_out: str = typer.Option(None, "--json", help="write the result as JSON to OUT ('-' = stdout)"),
         make: bool = typer.Option(False, "--make-data", help="write DATA.csv from the case's own model (plan + verification set) and stop"),
         noise: float = typer.Option(0.0, "--noise", help="with --make-data: relative Gaussian noise on each deflection (serial robots)"),
-        noise_mm: float = typer.Option(0.02, "--noise-mm", help="HISS: translation noise sigma, mm (weights the fit, L = 1/sigma^2; added by --make-data)"),
+        noise_mm: float = typer.Option(None, "--noise-mm", help="HISS: translation noise sigma, mm (default 0.02; weights the fit, L = 1/sigma^2; added by --make-data). --world: noise sigma on each measured translation, mm (default 0)"),
         noise_deg: float = typer.Option(0.02, "--noise-deg", help="HISS: rotation noise sigma, deg (as --noise-mm)"),
         true_weights: str = typer.Option("table2-df", "--true-weights", help="HISS --make-data: W1..W11 as 11 numbers, or table2-df | table2-fd (seed 001 Table 2)"),
-        seed: int = typer.Option(0, "--seed", help="HISS: seed of --make-data and of the fit's restarts"),
+        seed: int = typer.Option(0, "--seed", help="HISS: seed of --make-data and of the fit's restarts; --world: seed of the noise and the random poses"),
+        world: str = typer.Option(None, "--world", help="serial robot: 'beam' = measure on femcheck's beam-FE world of the arm and compare both models with seed 002 (no DATA.csv)"),
+        gravity: bool = typer.Option(False, "--gravity", help="--world: the measurements include the self-weight deflection"),
+        random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
         on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
         case = load_case_for(case_path, "identify", kinds=("serial_robot", "parallel_vjm"))
+        if world is not None and case.kind != "serial_robot":
+            raise IdentifyDataError(f"--world {world}: only for serial_robot cases; {case_path} is {case.kind!r}")
+        if world is not None and not make:
+            if data_path is not None:
+                raise IdentifyDataError(f"{data_path}: --world makes its own measurements; give DATA.csv only with --make-data")
+            from femcheck.cli._identify_world import identify_world
+            identify_world(case, case_path, world=world, json_out=json_out, noise_mm=0.0 if noise_mm is None else noise_mm,
+                           seed=seed, gravity=gravity, random_poses=random_poses)
+            return
+        if data_path is None:
+            raise IdentifyDataError("DATA.csv is required (or --world beam on a serial_robot case)")
         if case.kind == "parallel_vjm":
+            noise_mm = 0.02 if noise_mm is None else noise_mm
             from femcheck.cli._identify_hiss import identify_hiss
             identify_hiss(case, case_path, data_path, json_out=json_out, make=make, noise_rel=noise,
                           noise_mm=noise_mm, noise_deg=noise_deg, true_weights=true_weights, seed=seed,
@@ -106,7 +134,17 @@ def register(app: typer.Typer) -> None:
             import os
             if os.path.exists(data_path):
                 raise IdentifyDataError(f"{data_path}: exists; --make-data never overwrites a file")
-            typer.echo(f"wrote {make_data(case, data_path, noise)} rows to {data_path}")
+            w = None
+            if world is not None:
+                if world != "beam":
+                    raise IdentifyDataError(f"--world {world!r}; expected 'beam'")
+                from femcheck.vjm.beam_world import cobot7_world
+                w = cobot7_world(case)
+            nmm = 0.0 if noise_mm is None else noise_mm
+            if not np.isfinite(nmm) or nmm < 0:
+                raise IdentifyDataError(f"--noise-mm {nmm:g}; expected a finite sigma >= 0 (mm)")
+            typer.echo(f"wrote {make_data(case, data_path, noise, seed=seed, world=w, noise_mm=nmm)} rows to {data_path}"
+                       + (" (beam world)" if w is not None else ""))
             return
         vjm = case.vjm()
         ext = model is VJMModel.extended

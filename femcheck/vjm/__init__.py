@@ -18,6 +18,9 @@ Modules, one concept each:
 * :mod:`~femcheck.vjm.hole_twist` -- platform twist from three measured holes (seed 001 sec. 4.2).
 * :mod:`~femcheck.vjm.hiss_pipeline` -- seed 001's measured-data workflow (CSV, twists, fits, Tables 2-4, virtual experiments).
 * :mod:`~femcheck.vjm.hiss_published` -- seed 001's Tables 2-4 as printed.
+* :mod:`~femcheck.vjm.beam_world` -- a beam-FE "world" of a serial arm (tubes, six-spring joints, self-weight) that
+  makes virtual measurements no VJM made; reduces exactly to the conventional / extended VJM in its rigid limits.
+* :mod:`~femcheck.vjm.world_identification` -- seed 002's identification workflow (conventional vs extended) on such a world.
 
 Importing the package does no work.
 """
