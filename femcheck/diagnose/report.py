@@ -7,8 +7,6 @@ the preload identification, and the plots: residual maps and measured vs model p
 """
 from __future__ import annotations
 
-import base64
-import html
 import io
 import logging
 from pathlib import Path
@@ -16,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from femcheck.diagnose import residuals
-from femcheck.report.atomic import write_bytes_atomic, write_text_atomic
+from femcheck.report.sectioned import write_sectioned_report
 
 log = logging.getLogger(__name__)
 
@@ -25,16 +23,6 @@ def _pct(v) -> str:
     return f"{100 * v:.1f}"
 
 
-def _md_table(header, rows) -> str:
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(out)
-
-
-def _html_table(header, rows) -> str:
-    h = "".join(f"<th>{html.escape(str(c))}</th>" for c in header)
-    b = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><thead><tr>{h}</tr></thead><tbody>{b}</tbody></table>"
 
 
 def seed_table(readings, delta_model) -> tuple[list, list]:
@@ -162,30 +150,7 @@ def build_sections(diag, readings, case, data_path) -> list[tuple[str, list]]:
 
 def write_report(diag, readings, case, data_path, out_dir) -> list[Path]:
     """Write ``report.md``, ``report.html`` and the PNG plots into ``out_dir`` (atomically). Returns the paths."""
-    out_dir = Path(out_dir)
-    pngs = _plots(readings, diag)
-    sections = build_sections(diag, readings, case, data_path)
-    md = [f"# femcheck diagnose: {case.meta.name}", ""]
-    body = [f"<h1>femcheck diagnose: {html.escape(case.meta.name)}</h1>"]
-    for title, items in sections:
-        md += [f"## {title}", ""]
-        body.append(f"<h2>{html.escape(title)}</h2>")
-        for it in items:
-            if it[0] == "p":
-                md += [it[1], ""]
-                body.append(f"<p>{html.escape(it[1]).replace('**', '')}</p>")
-            elif it[0] == "table":
-                md += [_md_table(it[1], it[2]), ""]
-                body.append(_html_table(it[1], it[2]))
-            elif it[0] == "img":
-                md += [f"![{it[1]}]({it[1]})", ""]
-                b64 = base64.b64encode(pngs[it[1]]).decode("ascii")
-                body.append(f'<img alt="{it[1]}" src="data:image/png;base64,{b64}"/>')
-    css = ("body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;margin:8px 0}"
-           "td,th{border:1px solid #bbb;padding:2px 6px;font-size:12px;text-align:right}img{max-width:100%}")
-    page = f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>femcheck diagnose</title><style>{css}</style></head>" \
-           f"<body>{''.join(body)}</body></html>"
-    paths = [write_text_atomic(out_dir / "report.md", "\n".join(md)), write_text_atomic(out_dir / "report.html", page)]
-    paths += [write_bytes_atomic(out_dir / n, b) for n, b in pngs.items()]
+    paths = write_sectioned_report(f"femcheck diagnose: {case.meta.name}", build_sections(diag, readings, case, data_path),
+                                   _plots(readings, diag), out_dir, "femcheck diagnose")
     log.info("report written to %s", out_dir)
     return paths

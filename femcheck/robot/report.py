@@ -3,15 +3,12 @@ causes with places and intervals, held-out marker errors before/after with the l
 identifiability of the nuisance parameters, and the plot of the held-out error per pose before and after."""
 from __future__ import annotations
 
-import base64
-import html
 import io
 from pathlib import Path
 
 import numpy as np
 
-from femcheck.diagnose.report import _html_table, _md_table
-from femcheck.report.atomic import write_bytes_atomic, write_text_atomic
+from femcheck.report.sectioned import write_sectioned_report
 
 
 def _plot(diag) -> bytes:
@@ -75,27 +72,6 @@ def sections(diag, case, data_path) -> list:
 
 
 def write_report(diag, case, data_path, out_dir) -> list[Path]:
-    out_dir = Path(out_dir)
-    pngs = {"heldout_error_per_pose.png": _plot(diag)}
-    md = [f"# femcheck diagnose: {case.meta.name} vs {data_path}", ""]
-    body = [f"<h1>femcheck diagnose: {html.escape(case.meta.name)} vs {html.escape(str(data_path))}</h1>"]
-    for title, items in sections(diag, case, data_path):
-        md += [f"## {title}", ""]
-        body.append(f"<h2>{html.escape(title)}</h2>")
-        for it in items:
-            if it[0] == "p":
-                md += [it[1], ""]
-                body.append(f"<p>{html.escape(it[1]).replace('**', '')}</p>")
-            elif it[0] == "table":
-                md += [_md_table(it[1], it[2]), ""]
-                body.append(_html_table(it[1], it[2]))
-            else:
-                md += [f"![{it[1]}]({it[1]})", ""]
-                body.append(f'<img alt="{it[1]}" src="data:image/png;base64,{base64.b64encode(pngs[it[1]]).decode()}"/>')
-    css = ("body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;margin:8px 0}"
-           "td,th{border:1px solid #bbb;padding:2px 6px;font-size:12px}img{max-width:100%}")
-    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>femcheck diagnose</title><style>{css}</style>"
-            f"</head><body>{''.join(body)}</body></html>")
-    paths = [write_text_atomic(out_dir / "report.md", "\n".join(md)), write_text_atomic(out_dir / "report.html", page)]
-    paths += [write_bytes_atomic(out_dir / n, b) for n, b in pngs.items()]
-    return paths
+    """report.md, report.html (verdict first) and the per-pose error plot, atomically."""
+    return write_sectioned_report(f"femcheck diagnose: {case.meta.name} vs {data_path}", sections(diag, case, data_path),
+                                  {"heldout_error_per_pose.png": _plot(diag)}, out_dir, "femcheck diagnose")
