@@ -43,6 +43,8 @@ log = logging.getLogger(__name__)
 
 #: |z| of a linear trend of the residual over the measurement order above which it is a finding (drift)
 DRIFT_Z = 5.0
+#: backlash take-up width floor, as a share of the most loaded joint's median gravity torque
+BACKLASH_FLOOR = 0.02
 #: Gauss-Newton iterations of the calibration (each one full forward-difference Jacobian) and its tolerance
 GN_MAX_ITER, GN_RTOL = 12, 1e-6
 
@@ -173,7 +175,10 @@ def _backlash_width(tree, data, opts) -> np.ndarray:
     tau = np.abs(joint_torques(tree, fk, M))
     if opts.backlash_torque_Nm is not None:
         return np.full(tree.n_joints, opts.backlash_torque_Nm)
-    return np.maximum(0.05 * np.median(tau, axis=0), 1e-3)
+    med = np.median(tau, axis=0)
+    # a joint the weight hardly loads has no side to settle on: its take-up is as wide as BACKLASH_FLOOR of the
+    # most loaded joint's torque, so that its backlash stays a smooth (and weak) function of the pose
+    return np.maximum(0.05 * med, max(BACKLASH_FLOOR * float(med.max()), 1e-6))
 
 
 def _replicate_sigma(data: MarkerPositions) -> tuple[float, int]:
@@ -271,14 +276,21 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     # ---- before: calibrate the model as given ---------------------------------------------------------------
     nominal = ElasticParams.nominal(tree)
     bw = _backlash_width(tree, data, opts)
+    _fk0 = forward(tree, data.q @ tree.coupling.T)
+    tau_ind = joint_torques(tree, _fk0, gravity_wrenches(tree, _fk0, data.payload_kg)[1])
     mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw)
     mm.align(nominal)
     say("calibrating the model as given (sensor frame, marker offsets, geometry)")
-    x_b, kept0 = calibrate(mm, nominal, work_sigma, progress=say)
     lay = mm.layout
+    # which geometry the data identify is decided on the rigid model: a direction only the elastic response
+    # could see (the robot's tilt against gravity, say) would otherwise be calibrated into the effects diagnosed
+    rigid = ElasticParams(np.zeros(tree.n_joints), np.zeros((tree.n_rows, 2)), np.zeros(tree.n_joints),
+                          np.zeros(tree.n_rows), 1.0)
+    kept0, _, _ = identifiable_columns(mm.jacobian(np.zeros(lay.size), rigid) / work_sigma, lay.prior_sigma)
+    x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say)
     f_b = mm.predict(x_b, nominal).ravel()
     Jn = mm.jacobian(x_b, nominal, base=f_b)
-    kept, fixed, cond = identifiable_columns(Jn / work_sigma, lay.prior_sigma)
+    kept, fixed, cond = identifiable_columns(mm.jacobian(x_b, rigid) / work_sigma, lay.prior_sigma)
     if set(kept) != set(kept0):
         # the identifiable set seen at the calibrated point differs from the one at the start: calibrate those too
         x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept, x0=x_b, progress=say)
@@ -343,7 +355,10 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         full = np.linalg.norm(sub, axis=0)
         padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
         proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
-        eligible = np.flatnonzero((full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6))
+        ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
+        if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
+            ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
+        eligible = np.flatnonzero(ok)
         if not len(eligible):
             skipped.append(f"{spec.id}: no effect on the readings" +
                            (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
@@ -434,11 +449,17 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         x = x_b.copy()
         x[kept] += delta
         params = elastic(theta)
+        if log.isEnabledFor(logging.DEBUG):
+            big = np.argsort(-np.abs(delta / np.where(np.isfinite(lay.prior_sigma[kept]), lay.prior_sigma[kept], 1.0)))[:4]
+            log.debug("refine %s: largest nuisance steps %s; cause params %s", "+".join(key) or "none",
+                      [(lay.names[kept[i]], float(delta[i])) for i in big], theta)
         for _ in range(iterations):
             f = mm.predict(x, params).ravel()
             lin_k = LinearRivals((data.xyz.ravel() - f) / lin_sigma[0], lin.N, lin.P,
                                  -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()], lin.E, reading_of_row)
             d2, t2, _, _ = lin_k.fit(B_all, lb_all - theta, ub_all - theta, None)
+            log.debug("refine %s: chi2 %.2f before step", "+".join(key) or "none",
+                      float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()))
             x[kept] += d2
             theta = theta + t2
             params = elastic(theta)
@@ -551,11 +572,13 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         nom = nom_flat[lay_f[pl.spec.flat]]
         params, ci = {}, {}
         for g, lab, v, s in zip(pl.groups, pl.labels, vals, ses):
-            name = f"{lab}.{pl.spec.param}"
-            base = 1.0 if pl.spec.id == "mass_scale" else 0.0
+            # a cause on a rigid element gives the element's value; on a modelled one, what it adds to the case's
             if pl.spec.id == "mass_scale":
-                name = "mass_scale"
-            tot_v = base + v + (float(np.mean(nom[list(g)])) if pl.spec.id != "mass_scale" else 0.0)
+                name, tot_v = "mass_scale", 1.0 + v
+            elif np.any(nom[list(g)]):
+                name, tot_v = f"{lab}.added_{pl.spec.param}", v
+            else:
+                name, tot_v = f"{lab}.{pl.spec.param}", v
             params[name] = float(tot_v)
             half = 1.96 * s if np.isfinite(s) else float("nan")
             ci[name] = [float(tot_v - half), float(tot_v + half)]
@@ -593,8 +616,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
              "fixed": [lay.names[i] for i in fixed],
              "prior": {"length_m": opts.prior_length_m, "angle_deg": opts.prior_angle_deg, "marker_m": opts.prior_marker_m,
                        "frame": "none (flat)"},
-             "note": "columns scaled by their prior sigma (1 m or 1 rad without one); directions whose pivot in a "
-                     f"column-pivoted QR falls below {1e-7:g} of the largest are fixed at nominal"}
+             "note": "columns sigma-weighted and scaled by their prior sigma (1 m or 1 rad without one); directions whose "
+                     "pivot in a column-pivoted QR falls below 1e-7 of the largest, or below 1 (the data pin them down "
+                     "less well than the prior), are fixed at nominal"}
     return SerialDiagnosis(verdict=w.verdict, weighing=w, causes=tuple(causes), nuisance=nuis, identifiability=ident,
                            residual=residual, heldout=ho, leave_one_out=tuple(loo),
                            per_pose_error_mm_before=pose_err(e_before), per_pose_error_mm_after=pose_err(e_after),

@@ -13,8 +13,9 @@ cause.
 Prior. A weak Gaussian prior centred on the nominal values, sigma ``prior_length_m`` for lengths,
 ``prior_angle_deg`` for angles, ``prior_marker_m`` for marker offsets (case ``[diagnosis]``); the sensor frame has
 none. It keeps directions the data barely see from drifting; directions the data do not see at all (e.g. the
-first row's theta offset against the sensor frame's rotation about the base z) are *fixed* at nominal and listed
-(column-pivoted QR of the prior-scaled Jacobian, relative pivot < ``RANK_RTOL``).
+first row's theta offset against the sensor frame's rotation about the base z), and directions the data pin down
+less well than the prior does, are *fixed* at nominal and listed (column-pivoted QR of the prior-scaled,
+sigma-weighted Jacobian: pivot < ``RANK_RTOL`` of the largest, or < ``MIN_INFORMATION``).
 """
 from __future__ import annotations
 
@@ -29,6 +30,8 @@ from femcheck.robot.tree import ROW_PARAMS, STATIC_PARAMS, Geometry, RobotTree, 
 
 #: relative pivot of the column-pivoted QR below which a nuisance direction counts as not identifiable
 RANK_RTOL = 1e-7
+#: pivot (data information in prior units) below which a nuisance direction is fixed at nominal
+MIN_INFORMATION = 1.0
 #: finite-difference steps: angles (rad) and lengths (m); elastic flat parameters by kind
 FD_ANGLE, FD_LENGTH = 1e-7, 1e-7
 FD_ELASTIC = {"torsion": 1e-7, "tilt": 1e-7, "backlash": 1e-6, "bending": 1e-7, "mass_scale": 1e-4}
@@ -162,7 +165,10 @@ def identifiable_columns(J_w: np.ndarray, prior_sigma: np.ndarray) -> tuple[np.n
     Js = J_w * scale
     _, R, piv = scipy.linalg.qr(Js, mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
-    rank = int(np.sum(d > RANK_RTOL * d[0])) if d.size and d[0] > 0 else 0
+    # kept: directions the data pin down better than the prior does (pivot > 1 in prior units: the data-only
+    # standard error is below the prior sigma) and not numerically null; the others stay at nominal, since a
+    # direction the prior rules would wander by up to its prior sigma and break the linearization
+    rank = int(np.sum((d > RANK_RTOL * d[0]) & (d > MIN_INFORMATION))) if d.size and d[0] > 0 else 0
     kept, fixed = np.sort(piv[:rank]), np.sort(piv[rank:])
     sv = np.linalg.svd(Js[:, kept], compute_uv=False) if rank else np.array([1.0])
     return kept, fixed, float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
