@@ -78,7 +78,8 @@ def test_actuation_fe_makes_the_actuation_meshed_and_detected(fe_models, coverag
     by = {e.element: e for e in res.elements}
     assert by["actuation"].fe_source == "meshed" and by["actuation"].fe_response_ratio < 1e-6
     assert by["actuation"].detected and 0 < by["actuation"].min_detectable_pct < 50
-    assert res.base_passes and res.base_error_pct == pytest.approx(coverage.base_error_pct, rel=1e-9)
+    # the base moves only by the pretension's transverse geometric stiffness on the guideways (P0, P5: 0.83 -> 0.91 %)
+    assert res.base_passes and res.base_error_pct == pytest.approx(coverage.base_error_pct, abs=0.3)
     assert res.covered_share_pct == pytest.approx(coverage.covered_share_pct + by["actuation"].share_pct)
 
 
@@ -86,7 +87,7 @@ def test_closed_loop_actuation_fe_fails_eq44_and_coverage_says_so(fe_models):
     """The case's closed cable loop puts two strands in parallel: the FE is much stiffer than eq. 44's single
     strand, the unmutated check fails (a finding, docs/verify.md), and coverage flags its base as failing."""
     res = element_coverage(_actuation_fe(), points=("P0",), mutation_pct=50.0, mesh="coarse", fe_models=fe_models)
-    assert not res.base_passes and res.base_error_pct > 30.0          # measured 54 % (P0, coarse, +x)
+    assert not res.base_passes and res.base_error_pct > 30.0          # measured 55 % (P0, coarse, +x)
     by = {e.element: e for e in res.elements}
     assert by["actuation"].fe_source == "meshed" and by["actuation"].min_detectable_pct == 0.0
 

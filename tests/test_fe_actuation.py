@@ -74,13 +74,23 @@ def test_slider_outside_the_cable_run_is_refused(ref):
 
 def test_device_fe_uses_the_elements_and_checks_the_strands(ref):
     """With [actuation.fe] model = "elements" the device FE takes its actuation springs from the elements (one
-    per leg, from its slider position) and reports the lowest strand tension; the default keeps eq. 44."""
-    from femcheck.fe_device.device_model import actuation_springs_at, point_geometry, point_model
+    per leg, from its slider position) and adds the pretension's transverse geometric stiffness to the guideway
+    tip across the rail (frame A x, y); the default keeps eq. 44 and the guideways as they are."""
+    from types import SimpleNamespace
+    from femcheck.fe_device.device_model import actuation_at, point_geometry, point_model
     legs = point_geometry(ref, ("P5",))
-    m = point_model(ref, legs, 0, "P5", (), None)                  # the springs need no super-elements
-
-    assert actuation_springs_at(ref, m) is None
+    gw = tuple(SimpleNamespace(K=np.eye(6) * (k + 1.0)) for k in range(6))   # stand-ins: the springs need no mesh
+    m = point_model(ref, legs, 0, "P5", gw, None)
+    k0, K0 = actuation_at(ref, m)
+    assert k0 is None and np.array_equal(K0, m.K_lg)
     v = ref.with_params(**{"actuation.fe.model": "elements"})
-    k = actuation_springs_at(v, m)
+    k, K = actuation_at(v, m)
     s = (m.B - m.A) @ np.array([0.0, 0.0, 1.0])
     assert np.allclose(k, actuation_springs(v, s), rtol=1e-14) and np.ptp(k) > 0   # sliders differ at P5
+    dK = K - m.K_lg
+    tau = v.actuation.fe.cable_pretension_N
+    for i, si in enumerate(s):
+        g = leg_actuation(v, si)
+        assert dK[i, 0, 0] == dK[i, 1, 1] == pytest.approx(tau * (1 / g.strand_lengths[0] + 1 / g.strand_lengths[1]))
+        dK[i, 0, 0] = dK[i, 1, 1] = 0.0
+    assert not dK.any()                                          # nothing along the rail, no rotations

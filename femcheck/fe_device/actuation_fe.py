@@ -28,9 +28,9 @@ Layout (``[actuation.fe] layout``), in the rail frame (e along the rail, n = x_A
 
 The assembled system has the unknowns z = [u_S (3), φ (capstan), ψ (idler)]; φ and ψ are condensed out
 (Schur complement), leaving the 3 × 3 slider stiffness K_S in U. Its axial entry eᵀ K_S e is the actuation spring
-of the device FE; its transverse part is the pretension's geometric stiffness τ (1 / l1 + 1 / l2a), reported
-but not used (the leg model's actuation spring acts along the rail only; it is below 1 % of the guideway's
-lateral tip stiffness on the reference case, see docs/fe_solver.md).
+of the device FE; its transverse part is the pretension's geometric stiffness τ (1 / l1 + 1 / l2a) (the pulleys
+sit on the rigid base, so the strands hold the slider sideways like a string), which the device FE adds to the
+guideway's tip stiffness across the rail (:func:`femcheck.fe_device.device_model.actuation_at`).
 """
 from __future__ import annotations
 
@@ -60,6 +60,11 @@ class ActuationStiffness:
     dT_dF: np.ndarray
     tension_N: float
     k_shaft_at_cable: float
+
+    @property
+    def k_transverse(self) -> float:
+        """N/m: the pretension's geometric stiffness across the rail at the slider (isotropic about e)."""
+        return float((np.trace(self.K_slider) - self.k_axial) / 2.0)
 
     def strand_tensions(self, axial_force_N) -> np.ndarray:
         """Strand tensions (n_strands,) N when the slider carries ``axial_force_N`` along +e (linear)."""
@@ -150,5 +155,11 @@ def leg_actuation(case, s_m: float, e=(0.0, 0.0, 1.0)) -> ActuationStiffness:
 
 def actuation_springs(case, sliders_m, e=None) -> np.ndarray:
     """Axial actuation springs (n,) N/m of legs with sliders at ``sliders_m`` (n,) m (:func:`leg_actuation`)."""
+    return actuation_legs(case, sliders_m, e)[0]
+
+
+def actuation_legs(case, sliders_m, e=None):
+    """(axial springs (n,) N/m, transverse geometric springs (n,) N/m) of legs with sliders at ``sliders_m``."""
     e = case.geometry.guideway_direction if e is None else e
-    return np.array([leg_actuation(case, s, e).k_axial for s in np.atleast_1d(sliders_m)])
+    legs = [leg_actuation(case, s, e) for s in np.atleast_1d(sliders_m)]
+    return np.array([g.k_axial for g in legs]), np.array([g.k_transverse for g in legs])

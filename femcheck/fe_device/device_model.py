@@ -72,11 +72,26 @@ def point_model(case, legs, k: int, point: str, guideways, link: SuperElement) -
 def actuation_springs_at(case, model: PointModel):
     """(6,) N/m actuation springs of the point's legs from the actuation FE (``[actuation.fe] model =
     "elements"``, :mod:`femcheck.fe_device.actuation_fe`), or None: eq. 44 from the device parameters."""
+    return actuation_at(case, model)[0]
+
+
+def actuation_at(case, model: PointModel):
+    """(k_act (6,) N/m or None, K_lg (6, 6, 6)) for the device FE of one point.
+
+    With ``[actuation.fe] model = "elements"``: the axial springs of the condensed actuation FE, and the guideway
+    tip stiffnesses (frame A, local z = rail) plus the cable pretension's transverse geometric stiffness
+    τ (1/l1 + 1/l2a) on the two translations across the rail (the strands run from pulleys on the base to the
+    slider). Otherwise (None, ``model.K_lg``): eq. 44 from the device parameters, no cable across the rail.
+    """
     if case.actuation.fe.model != "elements":
-        return None
-    from femcheck.fe_device.actuation_fe import actuation_springs
+        return None, model.K_lg
+    from femcheck.fe_device.actuation_fe import actuation_legs
     e = _rail(case)
-    return actuation_springs(case, (model.B - model.A) @ e, e)
+    k_act, k_t = actuation_legs(case, (model.B - model.A) @ e, e)
+    K_lg = model.K_lg.copy()
+    K_lg[:, 0, 0] += k_t
+    K_lg[:, 1, 1] += k_t
+    return k_act, K_lg
 
 
 def _rail(case) -> np.ndarray:
@@ -127,14 +142,14 @@ def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, direct
     params = device_parameters(case)
     friction = friction or joint_friction(case)
     directions = tuple(directions or case.loads.directions)
-    k_act = actuation_springs_at(case, model)
+    k_act, K_lg = actuation_at(case, model)
     out: dict[tuple, LoadCaseResult] = {}
     for lvl in levels:
         for j in joints:
             if j == "contact" and lvl != "detailed":
                 continue
             for d in directions:
-                out[(lvl, j, d)] = load_case(case, model.K_lg, model.link.K, model.R_A, model.R_B, model.G,
+                out[(lvl, j, d)] = load_case(case, K_lg, model.link.K, model.R_A, model.R_B, model.G,
                                              lvl, j, d, params, friction, k_act)
     t_min = None
     if k_act is not None:
