@@ -9,8 +9,16 @@ from femcheck.coverage import element_coverage
 
 
 @pytest.fixture(scope="module")
-def coverage(case_path="cases/haptic_6psu.toml"):
-    return element_coverage(femcheck.load_case(case_path), points=("P0",), mutation_pct=50.0, mesh="coarse")
+def fe_models():
+    """The coarse FE super-elements at P0, built once (no law mutation or actuation option changes them)."""
+    from femcheck.verify.fe import run_fe
+    return run_fe(femcheck.load_case("cases/haptic_6psu.toml"), ("P0",), levels=("detailed",), mesh="coarse").models
+
+
+@pytest.fixture(scope="module")
+def coverage(fe_models, case_path="cases/haptic_6psu.toml"):
+    return element_coverage(femcheck.load_case(case_path), points=("P0",), mutation_pct=50.0, mesh="coarse",
+                            fe_models=fe_models)
 
 
 def test_law_scale_multiplies_the_element_compliance_exactly():
@@ -55,3 +63,37 @@ def test_coverage_cli_json_keys(tmp_path):
     doc = json.loads(out.read_text())
     assert {"mutation_pct", "covered_share_pct", "elements"} <= set(doc)
     assert {"element", "share_pct", "fe_source", "error_change_pct", "detected", "min_detectable_pct"} <= set(doc["elements"][0])
+
+
+def _actuation_fe(**opts):
+    return femcheck.load_case("cases/haptic_6psu.toml").with_params(
+        **{"actuation.fe.model": "elements", **{f"actuation.fe.{k}": v for k, v in opts.items()}})
+
+
+def test_actuation_fe_makes_the_actuation_meshed_and_detected(fe_models, coverage):
+    """Issue 22 item 2: with the actuation as elements (eq. 44's single-strand layout, which the elements reproduce
+    exactly, so the unmutated pair still passes) a wrong actuation law is caught and counts as covered."""
+    res = element_coverage(_actuation_fe(layout="single_strand"), points=("P0",), mutation_pct=50.0, mesh="coarse",
+                           fe_models=fe_models)
+    by = {e.element: e for e in res.elements}
+    assert by["actuation"].fe_source == "meshed" and by["actuation"].fe_response_ratio < 1e-6
+    assert by["actuation"].detected and 0 < by["actuation"].min_detectable_pct < 50
+    # the base moves only by the pretension's transverse geometric stiffness on the guideways (P0, P5: 0.83 -> 0.91 %)
+    assert res.base_passes and res.base_error_pct == pytest.approx(coverage.base_error_pct, abs=0.3)
+    assert res.covered_share_pct == pytest.approx(coverage.covered_share_pct + by["actuation"].share_pct)
+
+
+def test_closed_loop_actuation_fe_fails_eq44_and_coverage_says_so(fe_models):
+    """The case's closed cable loop puts two strands in parallel: the FE is much stiffer than eq. 44's single
+    strand, the unmutated check fails (a finding, docs/verify.md), and coverage flags its base as failing."""
+    res = element_coverage(_actuation_fe(), points=("P0",), mutation_pct=50.0, mesh="coarse", fe_models=fe_models)
+    assert not res.base_passes and res.base_error_pct > 30.0          # measured 55 % (P0, coarse, +x)
+    by = {e.element: e for e in res.elements}
+    assert by["actuation"].fe_source == "meshed" and by["actuation"].min_detectable_pct == 0.0
+
+
+def test_coverage_cli_set_override():
+    from femcheck.cli.coverage import parse_overrides
+    assert parse_overrides(["actuation.fe.model=elements", "actuation.fe.cable_pretension_N=80",
+                            'actuation.fe.layout="single_strand"']) == {
+        "actuation.fe.model": "elements", "actuation.fe.cable_pretension_N": 80, "actuation.fe.layout": "single_strand"}

@@ -142,6 +142,27 @@ class UniversalJoint:
 
 
 @dataclass(frozen=True)
+class ActuationFE:
+    """How the device FE models the actuation (``[actuation.fe]``; :mod:`femcheck.fe_device.actuation_fe`).
+
+    ``model = "law"`` (default): the FE takes the actuation spring 1/c_act from eq. 44 (the law the analytical
+    chain uses, so the FE does not check it). ``"elements"``: the FE assembles the motor shaft (beam, torsion),
+    the capstan and idler (rigid levers of radius ``capstan_radius_m``) and pretensioned cable strands, and
+    condenses them to the slider's axial DOF at each leg's slider position.
+    """
+
+    model: Literal["law", "elements"] = option("law", doc="law: eq. 44 spring (shared with the analytical "
+                                                          "model); elements: shaft + capstan + cable FE")
+    layout: Literal["closed_loop", "single_strand"] = option(
+        "closed_loop", doc="closed_loop: capstan - slider - idler - capstan, both strands pretensioned (the "
+                           "case's cable_length_m is the loop's free length); single_strand: eq. 44's one strand "
+                           "of length cable_length_m, the return side held at constant force")
+    cable_pretension_N: float = quantity("N", default=50.0, doc="tau, tension of every strand at rest")
+    idler_above_rail_m: float = quantity("m", check="nonnegative", default=0.0,
+                                         doc="idler tangent point above the rail's upper end (closed loop)")
+
+
+@dataclass(frozen=True)
 class Actuation:
     """DC motor -> capstan -> cable -> slider."""
     cable_diameter_m: float = quantity("m")
@@ -151,6 +172,7 @@ class Actuation:
     shaft_length_m: float = quantity("m")
     shaft_G_Pa: float = quantity("Pa")
     capstan_radius_m: float = quantity("m")
+    fe: ActuationFE = ActuationFE()
 
 
 @dataclass(frozen=True)

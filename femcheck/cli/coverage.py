@@ -18,6 +18,8 @@ def register(app: typer.Typer) -> None:
         mesh: str = typer.Option("coarse", "--mesh", help="FE mesh: coarse | default | fine"),
         json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
         jobs: int = typer.Option(1, "--jobs", min=1, help="worker processes for the FE super-elements"),
+        set_: Optional[list[str]] = typer.Option(None, "--set", metavar="KEY=VALUE",
+                                                 help="override a case key (TOML value), e.g. actuation.fe.model=elements; repeatable"),
     ):
         """Mutate each element's compliance law where it is defined, rerun the analytical model and the FE,
         and report which mutations the verify check catches (docs/verify.md, "Coverage")."""
@@ -38,6 +40,8 @@ def register(app: typer.Typer) -> None:
             from femcheck.report.atomic import check_output_file
             check_output_file(json_out, "--json")
         case = load_case_for(case_path, "coverage")
+        if set_:
+            case = case.with_params(**parse_overrides(set_))
         con = console()
         with progress("coverage", 1 + 5, con) as bar:
             res = element_coverage(case, pts, mutation, mesh, jobs=jobs, progress=lambda d: bar.advance(1, d))
@@ -57,3 +61,22 @@ def register(app: typer.Typer) -> None:
         con.print(t)
         con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance can be caught by the FE "
                   f"(base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s)")
+        if not res.base_passes:
+            con.print(f"[yellow]the unmutated model already fails the check ({res.base_error_pct:.2f} % > "
+                      f"{res.threshold_pct:g} %): every mutation is caught trivially[/yellow]")
+
+
+def parse_overrides(items) -> dict:
+    """["a.b=1.5", "x.y=elements"] -> {"a.b": 1.5, "x.y": "elements"}: each VALUE read as a TOML value, else
+    taken as a bare string."""
+    import tomllib
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise typer.BadParameter(f"--set: {item!r}; expected KEY=VALUE, e.g. actuation.fe.model=elements")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()
+    return out

@@ -62,6 +62,7 @@ class DeviceFEReadingModel:
         """(m, 3) TCP translation (m) under TCP forces ``force`` (m, 3) N at test-point poses (m, 6)."""
         from femcheck.chain import device_parameters
         from femcheck.fe_device.joint_friction import joint_friction
+        from femcheck.fe_device.device_model import actuation_at
         from femcheck.fe_device.loads import solve_state
         if not np.allclose(element_scale, self.base_scale) or joint_rotation_compliance != 0.0:
             raise ValueError(f"{self.name} evaluates the nominal FE model only (no effect parameters)")
@@ -79,7 +80,8 @@ class DeviceFEReadingModel:
             if not np.any(f):
                 continue
             m = self.fe.models[p]
-            s = solve_state(m.K_lg, m.link.K, m.R_A, m.R_B, m.G, np.r_[f, 0.0, 0.0, 0.0], self.level, self.joints,
-                            params, friction)
+            k_act, K_lg = actuation_at(self.case, m)
+            s = solve_state(K_lg, m.link.K, m.R_A, m.R_B, m.G, np.r_[f, 0.0, 0.0, 0.0], self.level, self.joints,
+                            params, friction, k_act)
             out[rows] = s.twist[:3]
         return out

@@ -69,13 +69,64 @@ def point_model(case, legs, k: int, point: str, guideways, link: SuperElement) -
                       guideways=tuple(guideways), link=link)
 
 
+def actuation_springs_at(case, model: PointModel):
+    """(6,) N/m actuation springs of the point's legs from the actuation FE (``[actuation.fe] model =
+    "elements"``, :mod:`femcheck.fe_device.actuation_fe`), or None: eq. 44 from the device parameters."""
+    return actuation_at(case, model)[0]
+
+
+def actuation_at(case, model: PointModel):
+    """(k_act (6,) N/m or None, K_lg (6, 6, 6)) for the device FE of one point.
+
+    With ``[actuation.fe] model = "elements"``: the axial springs of the condensed actuation FE, and the guideway
+    tip stiffnesses (frame A, local z = rail) plus the cable pretension's transverse geometric stiffness
+    τ (1/l1 + 1/l2a) on the two translations across the rail (the strands run from pulleys on the base to the
+    slider). Otherwise (None, ``model.K_lg``): eq. 44 from the device parameters, no cable across the rail.
+    """
+    if case.actuation.fe.model != "elements":
+        return None, model.K_lg
+    from femcheck.fe_device.actuation_fe import actuation_legs
+    e = _rail(case)
+    k_act, k_t = actuation_legs(case, (model.B - model.A) @ e, e)
+    K_lg = model.K_lg.copy()
+    K_lg[:, 0, 0] += k_t
+    K_lg[:, 1, 1] += k_t
+    return k_act, K_lg
+
+
+def _rail(case) -> np.ndarray:
+    e = np.asarray(case.geometry.guideway_direction, float)
+    return e / np.linalg.norm(e)
+
+
+def min_strand_tension(case, model: PointModel, cases: dict, k_act) -> float:
+    """Lowest cable-strand tension (N) over the detailed load states of ``cases`` (linear actuation FE: the
+    pretension plus each strand's share of the leg's actuation force k_act r_act); <= 0 means a strand went
+    slack and the linear (both strands taut) model does not hold there."""
+    from femcheck.fe_device.actuation_fe import leg_actuation
+    e = _rail(case)
+    legs = [leg_actuation(case, s, e) for s in (model.B - model.A) @ e]
+    t_min = np.inf
+    for (lvl, _, _), res in cases.items():
+        if lvl != "detailed":
+            continue
+        for st in res.states:
+            r_act = st.legs.interior(st.u_C)["q"][:, st.legs.blocks["act"]].reshape(6, -1)[:, 0]
+            for leg, F in zip(legs, np.asarray(k_act) * r_act):
+                t_min = min(t_min, float(leg.strand_tensions(F).min()))
+    return t_min
+
+
 @dataclasses.dataclass(frozen=True)
 class PointResult:
-    """All load cases of one point: ``cases`` {(level, joints, direction): LoadCaseResult}; ``seconds``."""
+    """All load cases of one point: ``cases`` {(level, joints, direction): LoadCaseResult}; ``seconds``;
+    ``min_strand_tension_N``: lowest cable tension of the actuation FE over the detailed states (None when
+    the actuation is eq. 44's spring)."""
 
     point: str
     cases: dict
     seconds: float
+    min_strand_tension_N: float | None = None
 
 
 def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, directions=None,
@@ -91,12 +142,19 @@ def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, direct
     params = device_parameters(case)
     friction = friction or joint_friction(case)
     directions = tuple(directions or case.loads.directions)
+    k_act, K_lg = actuation_at(case, model)
     out: dict[tuple, LoadCaseResult] = {}
     for lvl in levels:
         for j in joints:
             if j == "contact" and lvl != "detailed":
                 continue
             for d in directions:
-                out[(lvl, j, d)] = load_case(case, model.K_lg, model.link.K, model.R_A, model.R_B, model.G,
-                                             lvl, j, d, params, friction)
-    return PointResult(model.point, out, time.perf_counter() - t0)
+                out[(lvl, j, d)] = load_case(case, K_lg, model.link.K, model.R_A, model.R_B, model.G,
+                                             lvl, j, d, params, friction, k_act)
+    t_min = None
+    if k_act is not None:
+        t_min = min_strand_tension(case, model, out, k_act)
+        if t_min <= 0:
+            log.warning("%s: a cable strand goes slack (tension %.1f N < 0): raise [actuation.fe] "
+                        "cable_pretension_N; the linear actuation FE assumes taut strands", model.point, t_min)
+    return PointResult(model.point, out, time.perf_counter() - t0, t_min)

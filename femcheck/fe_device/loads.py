@@ -8,7 +8,8 @@
   fixed point on the secant stiffness k_i = F_i / δ(F_i) of each joint, F_i = max(|f_i|, F_min) the force
   its leg transmits (the secant of a nonlinear elastic spring reproduces its force at that state):
   start from the tangent stiffness at F_min, iterate until the largest relative change of k is < 1e-10.
-  Actuation (1/c_act) and the U-joint (K_UC, K_UB) springs are linear.
+  Actuation (1/c_act of eq. 44, or with ``[actuation.fe] model = "elements"`` the condensed shaft + capstan +
+  cable FE of :mod:`.actuation_fe`) and the U-joint (K_UC, K_UB) springs are linear.
 * detailed level, ``contact`` joints: the same, plus the frictional rotation springs of the joints
   (:mod:`.joint_friction`, secant stiffness min(k_stick, M_slip(F_i) / |r|)) in the same fixed point;
   each of the two load states is reached by monotonic proportional loading from zero, which is what
@@ -66,11 +67,14 @@ class LoadState:
     legs: object
 
 
-def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params, friction=None) -> LoadState:
+def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params, friction=None,
+                k_act=None) -> LoadState:
     """Equilibrium under ``wrench`` (6,) for 6 legs (K_lg (6, 6, 6), R_A, R_B (6, 3, 3), G (6, 6, 6)).
 
     ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses;
-    ``friction``: :class:`femcheck.fe_device.joint_friction.JointFriction` (``contact`` joints only).
+    ``friction``: :class:`femcheck.fe_device.joint_friction.JointFriction` (``contact`` joints only);
+    ``k_act`` (6,) N/m: the actuation springs along the rails (default 1/c_act of eq. 44 from ``params``;
+    :mod:`femcheck.fe_device.actuation_fe` gives them from elements).
     """
     layout = joint_layout(level, joints)
     if level == "simplified":
@@ -79,7 +83,7 @@ def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, para
         f = np.linalg.norm(np.einsum("iab,ib->ia", legs.K, uC)[:, :3], axis=1)
         return LoadState(t, uC, f, np.full(6, np.nan), 1, legs)
     c_uc, c_ub = float(np.squeeze(params.c_uc)), float(np.squeeze(params.c_ub))
-    k_act = np.full(6, 1.0 / float(np.squeeze(params.c_act)))
+    k_act = np.full(6, 1.0 / float(np.squeeze(params.c_act))) if k_act is None else np.asarray(k_act, float)
     k_uj = np.tile([1.0 / c_uc, 1.0 / c_uc, 1.0 / (c_uc + c_ub)], (6, 1))
     Es, Rs, Fmin = (float(np.squeeze(v)) for v in (params.E_star_sp, params.R_star_sp, params.F_min_sp))
     k_sp = np.full(6, (6.0 * Es**2 * Rs * Fmin) ** (1.0 / 3.0))
@@ -140,8 +144,9 @@ class LoadCaseResult:
 
 
 def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, direction: str, params,
-              friction=None) -> LoadCaseResult:
-    """Apply the protocol of ``level`` along ``direction`` and return the deflection (module docstring)."""
+              friction=None, k_act=None) -> LoadCaseResult:
+    """Apply the protocol of ``level`` along ``direction`` and return the deflection (module docstring);
+    ``k_act``: see :func:`solve_state`."""
     d = direction_unit(direction)
     L = case.loads
     if level == "simplified":
@@ -152,9 +157,9 @@ def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, directio
     else:
         P = L.detailed_test_N
         sp_ = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[L.detailed_preload_N * d, 0, 0, 0], level, joints, params,
-                          friction)
+                          friction, k_act)
         st = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[(L.detailed_preload_N + P) * d, 0, 0, 0], level, joints,
-                         params, friction)
+                         params, friction, k_act)
         states, twist = (sp_, st), st.twist - sp_.twist
         inc = st.legs.interior(st.u_C - sp_.u_C)["energy"]
     e = inc.sum(axis=0)
