@@ -1,0 +1,8 @@
+"""Parallel devices described leg by leg (issue 19): numeric inverse kinematics of any leg set, the general
+compliance-chain model ``K_T = sum_i G_i^T K_i G_i`` and its beam FE, all from one ``parallel_device`` case.
+
+- :mod:`femcheck.parallel.device`: the legs as arrays (joint screws, links, joint laws) and the test points;
+- :mod:`femcheck.parallel.leg_kinematics`: inverse kinematics, joint twists, actuation Jacobian;
+- :mod:`femcheck.parallel.chain_model`: :func:`evaluate` (simplified / detailed, rigid / released);
+- :mod:`femcheck.parallel.beam_fe`: the same device as beams with idealized joints and a rigid platform.
+"""
