@@ -11,7 +11,8 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
     [loads]       test_N, directions
     [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
         joints[k]  type = "R" | "U" | "S" | "P", actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
-                   P: 1; optional for U, S, P), drive (actuated joint), hertz_point (S), hertz_line (R/U)
+                   P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
+                   hertz_point (S), hertz_line (R/U)
         links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
                    "rigid", material, outer/inner_diameter_m (tube), width_m/depth_m (bar), x_axis (section x)
 
@@ -151,6 +152,8 @@ class JointSpec:
     actuated: bool = option(False, doc="the driven joint of the leg (R or P)")
     point_m: Vec3 | None = quantity("m", check="any", default=None, doc="centre at the home pose (R, U, S)")
     axes: tuple[Vec3, ...] | None = quantity("-", check="any", default=None, doc="joint axes at the home pose")
+    limits: tuple[float, float] | None = quantity("m | rad", check="any", default=None,
+                                                  doc="range of an R or P joint, from its home value (reach check)")
     drive: Drive | None = option(None)
     hertz_point: HertzPoint | None = option(None)
     hertz_line: HertzLine | None = option(None)
@@ -168,6 +171,8 @@ class JointSpec:
             raise ValueError("drive: only the actuated joint has a drive")
         if self.drive is not None and self.drive.law != {"P": "axial", "R": "torsional"}[self.type]:
             raise ValueError(f"drive.law: {self.drive.law!r} does not fit a {self.type} joint")
+        if self.limits is not None and (self.type not in ("R", "P") or not self.limits[0] < 0 < self.limits[1]):
+            raise ValueError("limits: only for an R or P joint, as [low, high] around its home value 0")
         if self.hertz_point is not None and self.type != "S":
             raise ValueError("hertz_point: only on an S joint")
         if self.hertz_line is not None and self.type not in ("R", "U"):

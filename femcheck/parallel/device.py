@@ -52,7 +52,7 @@ class Leg:
     dof_point (nd, 3) a point of the axis (R; for P the link start); dof_joint (nd,) joint index;
     actuated_dof: index of the driven freedom; joint_centre (nj,) index into centres (-1 for P);
     links: the members; b_platform (3,): the last centre in the platform frame.
-    drive_compliance: m/N or rad/(N m); hertz_point: {joint: (E*, R*, F_min)}; hertz_line: {joint: (c_uc, c_ub, link)}.
+    limits: ((dof, low, high), ...) joint ranges; drive_compliance: m/N or rad/(N m); hertz_point: {joint: (E*, R*, F_min)}; hertz_line: {joint: (c_uc, c_ub, link)}.
     """
 
     name: str
@@ -71,6 +71,7 @@ class Leg:
     drive_compliance: float
     hertz_point: dict
     hertz_line: dict
+    limits: tuple = ()
 
     @property
     def n_dof(self) -> int:
@@ -223,7 +224,8 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
     return Leg(name=name, case_index=i, copy=copy, joint_types=tuple(j.type for j in spec.joints), centres=centres,
                dof_kind=tuple(kinds), dof_axis=np.array(axes), dof_point=np.array(points), dof_joint=np.array(owner),
                actuated_dof=actuated, joint_centre=joint_centre, links=tuple(links), b_platform=b,
-               drive_compliance=spec.joints[act_joint].drive.compliance, hertz_point=hp, hertz_line=hl)
+               drive_compliance=spec.joints[act_joint].drive.compliance, hertz_point=hp, hertz_line=hl,
+               limits=tuple((owner.index(k), *j.limits) for k, j in enumerate(spec.joints) if j.limits is not None))
 
 
 def device_from_case(case, check_points: bool = False) -> ParallelDevice:
@@ -259,7 +261,7 @@ def test_points(case) -> np.ndarray:
 
 
 def _check_device(case, dev: ParallelDevice) -> None:
-    from femcheck.parallel.leg_kinematics import solve_legs, constraint_rank
+    from femcheck.parallel.leg_kinematics import TOL, constraint_rank, solve_legs
     home = dev.home_pose.copy()
     home[:3] += rotvec_to_matrix(home[3:]) @ dev.tcp_offset  # the TCP at the home pose
     rank, free = constraint_rank(dev, home[None])
@@ -273,7 +275,11 @@ def _check_device(case, dev: ParallelDevice) -> None:
         bad = np.flatnonzero(~state.legs[li].ok)
         if bad.size:
             k = int(bad[0])
+            s = state.legs[li]
+            why = (f"inverse kinematics residual {s.residual[k]:.3g}" if s.residual[k] >= TOL else
+                   "joint " + ", ".join(f"{s.q[k, d]:.4g} outside [{lo}, {hi}]" for d, lo, hi in leg.limits
+                                        if not lo <= s.q[k, d] <= hi))
             raise DeviceError(f"legs[{leg.case_index}]",
                               f"leg {li} ({leg.name!r}) cannot reach test point {POINT_LABELS[k]} "
-                              f"{np.array2string(poses[k, :3] * 1e3, precision=1)} mm (inverse kinematics residual "
-                              f"{state.legs[li].residual[k]:.3g}); move the test cube or change this leg")
+                              f"{np.array2string(poses[k, :3] * 1e3, precision=1)} mm ({why}); "
+                              "move the test cube or change this leg")

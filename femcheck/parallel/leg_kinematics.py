@@ -22,13 +22,16 @@ from femcheck.kinematics.frames import matrix_to_rotvec, rotvec_to_matrix, twist
 #: Gauss-Newton iterations and the residual (m and rad) below which a pose counts as reached
 MAX_ITER = 60
 TOL = 1e-11
+#: largest change of one joint value in one step (rad or m)
+MAX_STEP = 0.3
 
 
 @dataclasses.dataclass(frozen=True)
 class LegState:
     """One leg at n poses (base frame, SI).
 
-    q (n, nd) joint values (rad, m) from the home pose; ok (n,) reached; residual (n,) final |e|;
+    q (n, nd) joint values (rad, m) from the home pose; ok (n,) reached (residual below TOL and the joints in
+    their limits); residual (n,) final |e|;
     C (n, 3) platform attachment; centres (n, m, 3) joint centres; twists (n, nd, 6) unit joint twists at C;
     link_R (n, L, 3, 3) link frames (columns: section x, y and the link axis z); link_length (n, L) m.
     """
@@ -104,11 +107,13 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
         C = R[:, -1] @ c_last + t[:, -1]
         e = np.concatenate([C_target - C, matrix_to_rotvec(R_target @ np.swapaxes(R[:, -1] @ R_home, -1, -2))], -1)
         res = np.linalg.norm(e, axis=1)
-        active = res > TOL * 1e-2
+        active = (res > TOL * 1e-2) & np.isfinite(res)
         if not active.any():
             break
         J = np.swapaxes(_twists(leg, R, t, C), -1, -2)
         dq = np.einsum("nij,nj->ni", np.linalg.pinv(J[active], rcond=1e-10), e[active])
+        # limit the step (a far-off pose must not throw the leg through a singularity into NaN)
+        dq *= np.minimum(1.0, MAX_STEP / np.maximum(np.abs(dq).max(axis=1, keepdims=True), 1e-300))
         q[active] += dq
     R, t = _prefixes(leg, q)
     C = R[:, -1] @ c_last + t[:, -1]
@@ -128,7 +133,10 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
         x = x - np.einsum("ni,ni->n", x, z)[:, None] * z
         x /= np.linalg.norm(x, axis=1, keepdims=True)
         link_R[:, m] = np.stack([x, np.cross(z, x), z], axis=-1)
-    return LegState(q=q, ok=res < TOL, residual=res, C=C, centres=centres, twists=_twists(leg, R, t, C),
+    ok = res < TOL
+    for d, lo, hi in leg.limits:
+        ok &= (q[:, d] >= lo) & (q[:, d] <= hi)
+    return LegState(q=q, ok=ok, residual=res, C=C, centres=centres, twists=_twists(leg, R, t, C),
                     link_R=link_R, link_length=link_len)
 
 

@@ -1,0 +1,72 @@
+"""The ``parallel_device`` side of ``femcheck stiffness`` (issue 19): the same table layout as the 6-PSU path,
+computed by :mod:`femcheck.parallel`."""
+from __future__ import annotations
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from femcheck.cli import console
+from femcheck.cli._common import emit_json, parse_vector
+from femcheck.parallel.chain_model import evaluate
+from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.parallel.leg_kinematics import actuation_jacobian, solve_legs
+
+
+def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, str]:
+    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0."""
+    if point and pose:
+        raise typer.BadParameter("give either --point or --pose, not both")
+    if pose:
+        return parse_vector(pose, 6, "--pose")[None, :], f"[{pose}]"
+    label = (point or "P0").upper()
+    if label not in POINT_LABELS:
+        raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(POINT_LABELS)}")
+    return test_points(case)[[POINT_LABELS.index(label)]], label
+
+
+def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, wrench, json_out) -> None:
+    P, label = select_pose(case, point, pose)
+    dev = case.device
+    state = solve_legs(dev, P)
+    if not state.ok[0]:
+        leg = next(i for i, s in enumerate(state.legs) if not s.ok[0])
+        raise typer.BadParameter(f"pose {label} is not reachable by leg {leg} ({dev.legs[leg].name!r}): "
+                                 "no inverse-kinematics solution inside the joint limits")
+    W = parse_vector(wrench, 6, "--wrench") if wrench else np.array([0, 0, case.loads.test_N, 0, 0, 0.0])
+    r = evaluate(dev, P, W, model=model, joints=joints or case.model.joint_rotations, state=state)
+    contrib = {name: float(r.contributions[0, j]) for j, name in enumerate(r.element_names)
+               if r.element_energy[0, :, j].any()}
+    q_act = [float(s.q[0, leg.actuated_dof]) for leg, s in zip(dev.legs, state.legs)]
+    Ja = actuation_jacobian(dev, state)[0]
+    sv = np.linalg.svd(Ja[:, :3], compute_uv=False)
+    cond = float(sv[0] / sv[-1])
+    if json_out:
+        emit_json({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model, "joints": r.joints,
+                   "wrench": W.tolist(), "K": r.K[0].tolist(), "deflection": r.twist[0].tolist(),
+                   "contributions": contrib, "actuated_joints": q_act, "translational_condition_number": cond},
+                  json_out, inputs=[case_path])
+        return
+    con = console()
+    con.print(f"[bold]{case.meta.name}[/] — {label}, model [bold]{r.model}[/], joints [bold]{r.joints}[/], "
+              f"wrench {np.array2string(W, precision=3)} (N, N m)")
+    kt = Table(title="TCP stiffness K (SI: N/m | N/rad ; N m/m | N m/rad)")
+    for h in ("", "dx", "dy", "dz", "rx", "ry", "rz"):
+        kt.add_column(h, justify="right")
+    for i, h in enumerate(("Fx", "Fy", "Fz", "Mx", "My", "Mz")):
+        kt.add_row(h, *[f"{v:.4g}" for v in r.K[0, i]])
+    con.print(kt)
+    t = r.twist[0]
+    con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
+              f"theta = [{t[3]*1e3:.5f}, {t[4]*1e3:.5f}, {t[5]*1e3:.5f}] mrad")
+    kd = [float(r.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
+    con.print("directional stiffness (1 / compliance along the axis): "
+              + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+    con.print(f"{dev.n_legs} legs; actuated joints (from home, m or rad) {np.array2string(np.array(q_act), precision=4)}; "
+              f"condition number of the actuation Jacobian's translational part {cond:.3f}")
+    ct = Table(title="contributions (share of deflection energy)")
+    ct.add_column("element")
+    ct.add_column("share %", justify="right")
+    for name, v in contrib.items():
+        ct.add_row(name, f"{100*v:.1f}")
+    con.print(ct)

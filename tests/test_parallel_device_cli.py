@@ -1,0 +1,50 @@
+"""`femcheck stiffness` and `femcheck map` on the two parallel_device reference cases (issue 19), in-process."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from femcheck.case import load_case
+from femcheck.cli import get_app, main
+from femcheck.parallel.chain_model import evaluate
+from femcheck.parallel.device import test_points as cube_points
+from tests.conftest import ROOT
+
+runner = CliRunner()
+CASES = [ROOT / "cases" / "hexapod_6ups.toml", ROOT / "cases" / "delta_3ruu.toml"]
+
+
+@pytest.mark.parametrize("path", CASES)
+def test_stiffness_json_matches_the_library(path):
+    res = runner.invoke(get_app(), ["stiffness", str(path), "--point", "P5", "--wrench", "0,5,-10,0,0,0", "--json", "-"])
+    assert res.exit_code == 0, res.output
+    obj = json.loads(res.output)
+    case = load_case(path)
+    r = evaluate(case.device, cube_points(case)[5], [0, 5, -10, 0, 0, 0], joints=case.model.joint_rotations)
+    assert np.allclose(obj["K"], r.K[0], rtol=1e-12)
+    assert sum(obj["contributions"].values()) == pytest.approx(1.0, abs=1e-9)
+    assert np.allclose(np.array(obj["K"]) @ obj["deflection"], [0, 5, -10, 0, 0, 0], atol=1e-9)
+
+
+@pytest.mark.parametrize("path", CASES)
+def test_stiffness_table_rigid_simplified(path):
+    res = runner.invoke(get_app(), ["stiffness", str(path), "--model", "simplified", "--joints", "rigid", "--point", "P7"])
+    assert res.exit_code == 0, res.output
+    assert "rigid" in res.output and "contributions" in res.output and "N/mm" in res.output
+
+
+def test_unreachable_pose_is_one_clear_line(capsys):
+    assert main(["stiffness", str(CASES[1]), "--pose", "0,0,-0.5,0,0,0"]) == 2
+    assert "not reachable by leg" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("path", CASES)
+def test_map_writes_a_png(path, tmp_path):
+    out = tmp_path / "map.png"
+    res = runner.invoke(get_app(), ["map", str(path), "--z", "0", "--direction", "y", "--resolution", "15",
+                                    "--half-width", "0.05", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.read_bytes()[:4] == b"\x89PNG" and "reachable grid points" in res.output
