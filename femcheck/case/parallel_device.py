@@ -10,7 +10,7 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
     [workspace]   nominal_tcp_m, cube_edge_m, corner_signs (8 sign triples), rotation = [rx, ry, rz]
     [loads]       test_N, directions
     [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
-        joints[k]  type = "R" | "U" | "S" | "P", actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
+        joints[k]  type = "R" | "U" | "S" | "P" | "F" (a clamp, first joint only), actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
                    P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
                    hertz_point (S), hertz_line (R/U)
         links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
@@ -148,7 +148,8 @@ class HertzLine:
 
 @dataclass(frozen=True)
 class JointSpec:
-    type: Literal["R", "U", "S", "P"] = option(doc="revolute, universal, spherical, prismatic")
+    type: Literal["R", "U", "S", "P", "F"] = option(
+        doc="revolute, universal, spherical, prismatic; F: a fixed clamp (only first: the leg starts with a clamped link)")
     actuated: bool = option(False, doc="the driven joint of the leg (R or P)")
     point_m: Vec3 | None = quantity("m", check="any", default=None, doc="centre at the home pose (R, U, S)")
     axes: tuple[Vec3, ...] | None = quantity("-", check="any", default=None, doc="joint axes at the home pose")
@@ -177,7 +178,7 @@ class JointSpec:
             raise ValueError("hertz_point: only on an S joint")
         if self.hertz_line is not None and self.type not in ("R", "U"):
             raise ValueError("hertz_line: only on an R or U joint")
-        n_axes = {"R": (1,), "U": (1, 2), "S": (3,), "P": (1,)}[self.type]
+        n_axes = {"R": (1,), "U": (1, 2), "S": (3,), "P": (1,), "F": (0,)}[self.type]
         if self.axes is not None and len(self.axes) not in n_axes:
             raise ValueError(f"axes: {len(self.axes)} given; a {self.type} joint takes {' or '.join(map(str, n_axes))}")
         if self.type == "R" and self.axes is None:
@@ -264,8 +265,11 @@ def _check_leg(ctx: Context, i: int, leg: LegSpec) -> None:
     j = leg.joints
     if len(j) < 2:
         raise ctx.error(f"{where}.joints", f"{who} has {len(j)} joint(s); expected at least 2 (base and platform)")
-    if j[0].type == "P" or j[-1].type == "P":
-        raise ctx.error(f"{where}.joints", f"{who}: the first and last joints must have a centre (R, U or S), not P")
+    if j[0].type == "P" or j[-1].type in ("P", "F"):
+        raise ctx.error(f"{where}.joints", f"{who}: the first and last joints must have a centre (R, U or S; F first), "
+                                           f"not {j[0].type if j[0].type == 'P' else j[-1].type}")
+    if any(jt.type == "F" for jt in j[1:]):
+        raise ctx.error(f"{where}.joints", f"{who}: an F (clamp) joint can only be the first joint")
     act = [k for k, jt in enumerate(j) if jt.actuated]
     if len(act) != 1:
         raise ctx.error(f"{where}.joints", f"{who} has {len(act)} actuated joints; expected exactly one")
@@ -281,7 +285,7 @@ def _check_leg(ctx: Context, i: int, leg: LegSpec) -> None:
     if np.any(lengths < 1e-9):
         k = int(np.argmin(lengths))
         raise ctx.error(f"{where}.links[{k}]", f"{who}: link {k} has zero length at the home pose")
-    dof = sum({"R": 1, "U": 2, "S": 3, "P": 1}[jt.type] for jt in j)
+    dof = sum({"R": 1, "U": 2, "S": 3, "P": 1, "F": 0}[jt.type] for jt in j)
     if dof < 3:
         raise ctx.error(f"{where}.joints", f"{who} has {dof} joint freedoms; a leg needs at least 3")
 

@@ -81,11 +81,13 @@ class Leg:
     def passive_dofs(self) -> np.ndarray:
         return np.array([k for k in range(self.n_dof) if k != self.actuated_dof], dtype=int)
 
-    def first_dof(self, joint: int) -> int:
-        return int(np.flatnonzero(self.dof_joint == joint)[0])
+    def dofs_before(self, joint: int) -> int:
+        """Number of freedoms of the joints before ``joint`` (its centre moves with them only)."""
+        return int(np.sum(self.dof_joint < joint))
 
-    def last_dof(self, joint: int) -> int:
-        return int(np.flatnonzero(self.dof_joint == joint)[-1])
+    def dofs_through(self, joint: int) -> int:
+        """Number of freedoms up to and including ``joint`` (the body after it moves with them)."""
+        return int(np.sum(self.dof_joint <= joint))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,8 +186,10 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
                 if np.linalg.norm(a2) < 1e-9:
                     raise DeviceError(f"legs[{i}].joints[{k}].axes", f"{who}: the first U axis lies along the link")
                 ax = [a1, _unit(a2)]
-        else:
+        elif j.type == "S":
             ax = list(given) if given is not None else list(np.eye(3))
+        else:  # F: a clamp, no freedom
+            ax = []
         for a in ax:
             kinds.append("R"), axes.append(a), points.append(c), owner.append(k)
     act_joint = next(k for k, j in enumerate(spec.joints) if j.actuated)

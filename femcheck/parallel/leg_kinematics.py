@@ -119,7 +119,7 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
     C = R[:, -1] @ c_last + t[:, -1]
     e = np.concatenate([C_target - C, matrix_to_rotvec(R_target @ np.swapaxes(R[:, -1] @ R_home, -1, -2))], -1)
     res = np.linalg.norm(e, axis=1)
-    first = np.array([leg.first_dof(int(np.flatnonzero(leg.joint_centre == m)[0])) for m in range(len(leg.centres))])
+    first = np.array([leg.dofs_before(int(np.flatnonzero(leg.joint_centre == m)[0])) for m in range(len(leg.centres))])
     centres = np.einsum("nmij,mj->nmi", R[:, first], leg.centres) + t[:, first]
     centres[:, -1] = C
     link_R = np.empty((n, len(leg.links), 3, 3))
@@ -128,7 +128,7 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
         d = centres[:, ln.end] - centres[:, ln.start]
         link_len[:, m] = np.linalg.norm(d, axis=1)
         z = d / link_len[:, m, None]
-        body = leg.last_dof(int(np.flatnonzero(leg.joint_centre == ln.start)[0])) + 1  # after the start joint
+        body = leg.dofs_through(int(np.flatnonzero(leg.joint_centre == ln.start)[0]))  # after the start joint
         x = R[:, body] @ ln.x_axis
         x = x - np.einsum("ni,ni->n", x, z)[:, None] * z
         x /= np.linalg.norm(x, axis=1, keepdims=True)
