@@ -48,3 +48,15 @@ def test_map_writes_a_png(path, tmp_path):
                                     "--half-width", "0.05", "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert out.read_bytes()[:4] == b"\x89PNG" and "reachable grid points" in res.output
+
+
+@pytest.mark.parametrize("path", CASES)
+def test_verify_writes_tables_and_passes_check(path, tmp_path):
+    out = tmp_path / "run"
+    res = runner.invoke(get_app(), ["verify", str(path), "--points", "P0,P7", "--out", str(out), "--check"])
+    assert res.exit_code == 0, res.output
+    assert "beam FE" in res.output
+    rows = (out / "errors_detailed.csv").read_text().splitlines()
+    assert rows[0] == "level,joints,point,direction,analytical_mm,fe_mm,rel_error_pct"
+    assert len(rows) == 1 + 2 * 2 * 3  # joints x points x directions
+    assert max(abs(float(r.split(",")[-1])) for r in rows[1:]) < 1e-6

@@ -53,8 +53,9 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
     kt = Table(title="TCP stiffness K (SI: N/m | N/rad ; N m/m | N m/rad)")
     for h in ("", "dx", "dy", "dz", "rx", "ry", "rz"):
         kt.add_column(h, justify="right")
+    K = np.where(np.abs(r.K[0]) < 1e-12 * np.abs(r.K[0]).max(), 0.0, r.K[0])  # rounding noise shown as 0
     for i, h in enumerate(("Fx", "Fy", "Fz", "Mx", "My", "Mz")):
-        kt.add_row(h, *[f"{v:.4g}" for v in r.K[0, i]])
+        kt.add_row(h, *[f"{v:.4g}" for v in K[i]])
     con.print(kt)
     t = r.twist[0]
     con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
@@ -70,3 +71,46 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
     for name, v in contrib.items():
         ct.add_row(name, f"{100*v:.1f}")
     con.print(ct)
+
+
+#: a parallel device's beam FE uses the analytical element laws, so analytical and FE agree to rounding; a
+#: relative deflection error above this (%) means the chain algebra or the FE assembly is wrong
+VERIFY_THRESHOLD_PCT = 1e-6
+
+
+def verify(case, case_path, *, levels, points, out, force, check) -> None:
+    """Analytical vs beam FE at the test points: errors_<level>.csv / .md in ``out``, a summary on screen."""
+    from femcheck.parallel.verification import verify_device
+    from femcheck.report.atomic import write_text_atomic
+    from femcheck.report.run_folder import prepare_run_folder
+
+    labels = None
+    if points:
+        labels = [p.strip().upper() for p in points.split(",") if p.strip()]
+        bad = [p for p in labels if p not in POINT_LABELS]
+        if bad:
+            raise typer.BadParameter(f"--points: {bad[0]!r}; expected P0..P8")
+    levels = levels or ("simplified", "detailed")
+    prepare_run_folder(out, "femcheck verify", force=force, inputs=[case_path])
+    res = verify_device(case, labels, levels)
+    con = console()
+    for level in levels:
+        rows = [r for r in res.rows if r["level"] == level]
+        write_text_atomic(out / f"errors_{level}.csv", type(res)(rows=tuple(rows)).to_csv())
+        write_text_atomic(out / f"errors_{level}.md", type(res)(rows=tuple(rows)).to_markdown())
+        t = Table(title=f"{case.meta.name}: {level} analytical vs beam FE (deflection mm under {case.loads.test_N:g} N)")
+        for c in ("joints", "direction", "points", "analytical_mm (min..max)", "max |rel error| %"):
+            t.add_column(c, justify="right")
+        for jt in ("rigid", "released"):
+            for d in case.loads.directions:
+                sel = [r for r in rows if r["joints"] == jt and r["direction"] == d]
+                a = [r["analytical_mm"] for r in sel]
+                t.add_row(jt, d, str(len(sel)), f"{min(a):.5f}..{max(a):.5f}",
+                          f"{max(abs(r['rel_error_pct']) for r in sel):.2e}")
+        con.print(t)
+    con.print(f"beam FE: links as beams, joints as exact releases with the analytical drive and contact springs, "
+              f"rigid platform; max |error| {res.max_abs_error_pct:.2e} % over {len(res.rows)} deflections; wrote "
+              f"{2 * len(levels)} files to {out}")
+    if check and res.max_abs_error_pct > VERIFY_THRESHOLD_PCT:
+        con.print(f"[red]analytical-FE error above {VERIFY_THRESHOLD_PCT:g} %[/]")
+        raise typer.Exit(1)

@@ -52,7 +52,10 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
-        case = load_case_for(case_path, "verify")
+        case = load_case_for(case_path, "verify", kinds=("haptic_6psu", "parallel_device"))
+        if case.kind == "parallel_device":
+            from femcheck.cli._parallel_device import verify
+            return verify(case, case_path, levels=LEVEL_CHOICES[level], points=points, out=out, force=force, check=check)
         pts = None
         if points:
             pts = [p.strip().upper() for p in points.split(",") if p.strip()]
