@@ -269,9 +269,10 @@ def _check_device(case, dev: ParallelDevice) -> None:
     home = dev.home_pose.copy()
     home[:3] += rotvec_to_matrix(home[3:]) @ dev.tcp_offset  # the TCP at the home pose
     rank, free = constraint_rank(dev, home[None])
+    free = np.where(np.abs(free) < 1e-9, 0.0, free)
     if rank < 6:
         raise DeviceError("legs", f"with released joints the legs leave the platform free to move at the home pose "
-                                  f"along the twist {np.array2string(free, precision=3)} (TCP, [d; theta]); "
+                                  f"along the twist {np.array2string(free, precision=3, suppress_small=True)} (TCP, [d; theta]); "
                                   "check the joint axes")
     poses = test_points(case)
     state = solve_legs(dev, poses)
