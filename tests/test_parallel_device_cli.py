@@ -60,3 +60,14 @@ def test_verify_writes_tables_and_passes_check(path, tmp_path):
     assert rows[0] == "level,joints,point,direction,analytical_mm,fe_mm,rel_error_pct"
     assert len(rows) == 1 + 2 * 2 * 3  # joints x points x directions
     assert max(abs(float(r.split(",")[-1])) for r in rows[1:]) < 1e-6
+
+
+def test_docs_quote_the_real_output():
+    """docs/parallel_device.md shows real command output: its quoted lines are what the commands print now."""
+    doc = " ".join((ROOT / "docs" / "parallel_device.md").read_text().split())
+    for args in (["stiffness", str(CASES[0]), "--point", "P3"], ["stiffness", str(CASES[1]), "--point", "P3", "--joints", "rigid"]):
+        res = runner.invoke(get_app(), args)
+        assert res.exit_code == 0, res.output
+        for line in res.output.splitlines():
+            if line.startswith(("deflection:", "directional stiffness", f"{len(load_case(args[1]).device.legs)} legs")):
+                assert " ".join(line.split()) in doc, line

@@ -40,6 +40,9 @@ def register(app: typer.Typer) -> None:
     ):
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
+        A parallel_device case (docs/parallel_device.md) is verified against the beam FE of its description:
+        errors_<level>.csv/.md in --out; --mesh, --jobs, --vtu, --joint-fe and the baselines do not apply.
+
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
         rel_error_pct (%); the detailed file compares the contact-joint FE with both idealizations, and
         errors_detailed_matched.csv the FE with the same idealization), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
