@@ -243,3 +243,16 @@ def test_error_names_a_free_platform_motion(tmp_path):
     bad = _edited(DELTA, "axes = [[0.661438, 0.0, -0.75], [0.0, 1.0, 0.0]]", "axes = [[0.661438, 0.0, -0.75], [0.75, 0.0, 0.661438]]")
     with pytest.raises(CaseError, match="free to move"):
         load_case(_write(tmp_path, bad))
+
+
+def test_with_params_reaches_a_leg_entry(delta):
+    """A design variant of one link by its index in the [[legs]] array (every symmetric copy follows)."""
+    thick = delta.with_params(**{"legs.0.links.1.outer_diameter_m": 0.010})
+    assert thick.legs[0].links[1].outer_diameter_m == 0.010 and delta.legs[0].links[1].outer_diameter_m == 0.008
+    P = cube_points(delta)
+    assert np.all(evaluate(thick.device, P, None).directional_stiffness([1, 0, 0])
+                  > evaluate(delta.device, P, None).directional_stiffness([1, 0, 0]))
+    with pytest.raises(CaseError, match="index 3 out of range"):
+        delta.with_params(**{"legs.3.links.1.outer_diameter_m": 0.010})
+    with pytest.raises(CaseError, match=r"legs\[0\]\.links\[1\]\.inner_diameter_m"):
+        delta.with_params(**{"legs.0.links.1.outer_diameter_m": 0.005})

@@ -71,3 +71,13 @@ def test_docs_quote_the_real_output():
         for line in res.output.splitlines():
             if line.startswith(("deflection:", "directional stiffness", f"{len(load_case(args[1]).device.legs)} legs")):
                 assert " ".join(line.split()) in doc, line
+
+
+def test_stiffness_json_has_per_leg_shares():
+    res = runner.invoke(get_app(), ["stiffness", str(CASES[0]), "--point", "P2", "--wrench", "10,0,0,0,0,0", "--json", "-"])
+    obj = json.loads(res.output)
+    legs = obj["leg_contributions"]
+    assert list(legs) == ["a1", "b1", "a2", "b2", "a3", "b3"]
+    assert sum(sum(v.values()) for v in legs.values()) == pytest.approx(1.0, abs=1e-9)
+    for name, share in obj["contributions"].items():
+        assert sum(v.get(name, 0.0) for v in legs.values()) == pytest.approx(share, abs=1e-12)

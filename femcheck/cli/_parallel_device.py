@@ -37,6 +37,9 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
     r = evaluate(dev, P, W, model=model, joints=joints or case.model.joint_rotations, state=state)
     contrib = {name: float(r.contributions[0, j]) for j, name in enumerate(r.element_names)
                if r.element_energy[0, :, j].any()}
+    work = float(W @ r.twist[0])
+    leg_contrib = {leg.name: {name: float(r.element_energy[0, i, j] / work) for j, name in enumerate(r.element_names)
+                              if r.element_energy[0, i, j]} for i, leg in enumerate(dev.legs)} if work > 0 else {}
     q_act = [float(s.q[0, leg.actuated_dof]) for leg, s in zip(dev.legs, state.legs)]
     Ja = actuation_jacobian(dev, state)[0]
     sv = np.linalg.svd(Ja[:, :3], compute_uv=False)
@@ -44,7 +47,8 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
     if json_out:
         emit_json({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model, "joints": r.joints,
                    "wrench": W.tolist(), "K": r.K[0].tolist(), "deflection": r.twist[0].tolist(),
-                   "contributions": contrib, "actuated_joints": q_act, "translational_condition_number": cond},
+                   "contributions": contrib, "leg_contributions": leg_contrib, "actuated_joints": q_act,
+                   "translational_condition_number": cond},
                   json_out, inputs=[case_path])
         return
     con = console()
