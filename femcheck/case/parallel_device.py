@@ -238,6 +238,12 @@ class ParallelDeviceCase(CaseRecord):
 
     kind = CASE_KIND
 
+    def material(self, name: str) -> Material:
+        for m in self.materials:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
     @property
     def device(self):
         """The legs resolved into arrays (:class:`femcheck.parallel.device.ParallelDevice`), cached per case."""
