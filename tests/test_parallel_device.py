@@ -1,8 +1,6 @@
 """The general parallel-device model (issue 19) against closed forms and independent derivations."""
 from __future__ import annotations
 
-import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
@@ -256,3 +254,9 @@ def test_with_params_reaches_a_leg_entry(delta):
         delta.with_params(**{"legs.3.links.1.outer_diameter_m": 0.010})
     with pytest.raises(CaseError, match=r"legs\[0\]\.links\[1\]\.inner_diameter_m"):
         delta.with_params(**{"legs.0.links.1.outer_diameter_m": 0.005})
+
+
+def test_unreachable_pose_names_the_leg(delta):
+    from femcheck.errors import UnreachablePoseError
+    with pytest.raises(UnreachablePoseError, match=r"unreachable by chain \(leg\) 0: no inverse-kinematics solution of leg 'leg1'"):
+        evaluate(delta.device, [0.0, 0.0, -0.5, 0, 0, 0])

@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 
 from femcheck.fe.beam import BeamSection, assemble_beam_stiffness
-from femcheck.kinematics.frames import twist_shift
 from femcheck.parallel.leg_kinematics import DeviceState, solve_legs
 
 

@@ -24,7 +24,7 @@ import dataclasses
 import numpy as np
 
 from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
-from femcheck.errors import ConvergenceError
+from femcheck.errors import ConvergenceError, UnreachablePoseError
 from femcheck.kinematics.frames import rot6, twist_shift
 from femcheck.parallel.leg_kinematics import DeviceState, released_wrenches, solve_legs
 
@@ -125,8 +125,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     if not state.ok.all():
         k = int(np.flatnonzero(~state.ok)[0])
         leg = next(i for i, s in enumerate(state.legs) if not s.ok[k])
-        raise ValueError(f"pose #{k} {np.array2string(state.poses[k], precision=4)} is not reached by leg {leg} "
-                         f"({device.legs[leg].name!r})")
+        raise UnreachablePoseError(f"#{k} {np.array2string(state.poses[k], precision=4)}", leg,
+                                   f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
     W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
     parts = leg_element_compliances(device, state, model)
     names = device.element_names
