@@ -260,3 +260,21 @@ def test_unreachable_pose_names_the_leg(delta):
     from femcheck.errors import UnreachablePoseError
     with pytest.raises(UnreachablePoseError, match=r"unreachable by chain \(leg\) 0: no inverse-kinematics solution of leg 'leg1'"):
         evaluate(delta.device, [0.0, 0.0, -0.5, 0, 0, 0])
+
+
+def test_element_scale_locates_an_effect_by_leg_and_element(hexapod):
+    dev = hexapod.device
+    P = cube_points(hexapod)
+    W = [0, 0, 10, 0, 0, 0]
+    # twice every compliance: half the stiffness (the Hertz linearization force does not change)
+    assert np.allclose(evaluate(dev, P, W, element_scale=2.0).K, evaluate(dev, P, W).K / 2, rtol=1e-10)
+    # strut 2 three times softer: the closed form J^T diag(k) J with k_2 / 3 (simplified, released)
+    scale = np.ones((6, len(dev.element_names)))
+    scale[2, dev.element_names.index("strut")] = 3.0
+    r = evaluate(dev, P, W, model="simplified", joints="released", element_scale=scale)
+    J = actuation_jacobian(dev, r.state)
+    link = dev.legs[0].links[0]
+    k = link.E * link.section.A / np.stack([s.link_length[:, 0] for s in r.state.legs], axis=1)
+    k[:, 2] /= 3.0
+    K_closed = np.einsum("nia,ni,nib->nab", J, k, J)
+    assert np.abs(r.K - K_closed).max() < CLOSED_FORM_RTOL * np.abs(K_closed).max()

@@ -104,7 +104,7 @@ def _leg_stiffness(S, N):
 
 
 def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str = "released",
-             state: DeviceState | None = None) -> ParallelResult:
+             state: DeviceState | None = None, element_scale=None) -> ParallelResult:
     """Stiffness, deflection and element breakdown of ``device`` (:class:`~femcheck.parallel.device.ParallelDevice`).
 
     Parameters
@@ -115,6 +115,9 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     model : "simplified" (links only) or "detailed" (links + drive + joint contact laws)
     joints : "rigid" or "released"
     state : the inverse kinematics of ``poses`` if already solved (:func:`solve_legs`)
+    element_scale : (L, E) or (n, L, E) factors on the compliance of element kind e (order
+        ``device.element_names``) in leg i (1 = as modelled, 2 = twice as soft, 0 = rigid): the hook for
+        model extensions and for locating an effect by leg and element
     """
     if model not in MODELS:
         raise ValueError(f"model: {model!r}; expected one of {list(MODELS)}")
@@ -131,6 +134,9 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     parts = leg_element_compliances(device, state, model)
     names = device.element_names
     L = device.n_legs
+    scale = np.ones((n, L, len(names))) if element_scale is None else \
+        np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, len(names))))
+    parts = [{name: S * scale[:, i, names.index(name), None, None] for name, S in p.items()} for i, p in enumerate(parts)]
     G = [state.G(i) for i in range(L)]
     N = [np.broadcast_to(np.eye(6), (n, 6, 6)) if joints == "rigid" else released_wrenches(leg, state.legs[i])
          for i, leg in enumerate(device.legs)]
@@ -139,7 +145,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     k_h = {key: hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
     history = []
     for it in range(_FIXED_POINT_MAX_ITER):
-        S_leg = [S_fixed[i] + sum(_translational(1.0 / k_h[key]) for key in k_h if key[0] == i) for i in range(L)]
+        S_leg = [S_fixed[i] + sum(_translational(scale[:, i, names.index("hertz_point")] / k_h[key])
+                                  for key in k_h if key[0] == i) for i in range(L)]
         K_leg = [_leg_stiffness(S_leg[i], N[i]) for i in range(L)]
         K_T = sum(np.swapaxes(G[i], -1, -2) @ K_leg[i] @ G[i] for i in range(L))
         K_T = 0.5 * (K_T + np.swapaxes(K_T, -1, -2))
@@ -163,7 +170,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
             energy[:, i, names.index(name)] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
         for (li, j) in k_h:
             if li == i:
-                energy[:, i, names.index("hertz_point")] += np.sum(W_C[:, i, :3] ** 2, axis=1) / k_h[li, j]
+                energy[:, i, names.index("hertz_point")] += (np.sum(W_C[:, i, :3] ** 2, axis=1)
+                                                             * scale[:, i, names.index("hertz_point")] / k_h[li, j])
     work = np.einsum("ni,ni->n", W, t)
     with np.errstate(invalid="ignore", divide="ignore"):
         contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
