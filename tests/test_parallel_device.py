@@ -278,3 +278,22 @@ def test_element_scale_locates_an_effect_by_leg_and_element(hexapod):
     k[:, 2] /= 3.0
     K_closed = np.einsum("nia,ni,nib->nab", J, k, J)
     assert np.abs(r.K - K_closed).max() < CLOSED_FORM_RTOL * np.abs(K_closed).max()
+
+
+def test_error_symmetry_needs_the_home_pose_on_the_axis(tmp_path):
+    bad = _edited(HEXAPOD, "home_pose = [0.0, 0.0, 0.18, 0.0, 0.0, 0.0]", "home_pose = [0.01, 0.0, 0.18, 0.0, 0.0, 0.0]")
+    with pytest.raises(CaseError, match=r"symmetry\.copies: copies = 3 needs the home pose on the base z axis"):
+        load_case(_write(tmp_path, bad))
+
+
+def test_error_clamp_only_first(tmp_path):
+    import re
+    text = re.sub(r'type = "U"\n  point_m = \[0\.18, 0\.0, 0\.0\]\n  axes = .*\n  hertz_line = .*\n',
+                  'type = "F"\n  point_m = [0.18, 0.0, 0.0]\n', DELTA.read_text())
+    assert 'type = "F"' in text
+    with pytest.raises(CaseError, match=r"legs\[0\]\.joints: leg 0 \('leg'\): an F \(clamp\) joint can only be the first"):
+        load_case(_write(tmp_path, text))
+    # a joint law on a joint that cannot carry it is named at the joint's key
+    bad = _edited(HEXAPOD, 'type = "S"\n  point_m = [0.042426, -0.042426, 0.18]', 'type = "U"\n  point_m = [0.042426, -0.042426, 0.18]')
+    with pytest.raises(CaseError, match=r"legs\[0\]\.joints\[2\]\.hertz_point: only on an S joint"):
+        load_case(_write(tmp_path, bad))
