@@ -72,7 +72,8 @@ def load_case(path):
 
 
 def with_params(case, dotted: dict[str, object]):
-    """A re-validated variant of ``case`` with values set by dotted key (``"guideway.width_radial_m"``).
+    """A re-validated variant of ``case`` with values set by dotted key (``"guideway.width_radial_m"``; an entry
+    of an array of tables by its index, ``"legs.0.links.1.outer_diameter_m"``).
 
     An unknown key raises :class:`CaseError` naming it; the original case is unchanged.
     """
@@ -82,6 +83,11 @@ def with_params(case, dotted: dict[str, object]):
         parts = key.split(".")
         node = raw
         for p in parts[:-1]:
+            if isinstance(node, list) and p.isdigit():  # an array of tables: "legs.0.links.1.outer_diameter_m"
+                if int(p) >= len(node):
+                    raise CaseError(label, key, f"index {p} out of range; the array has {len(node)} entries")
+                node = node[int(p)]
+                continue
             if not isinstance(node, dict):
                 raise CaseError(label, key, "no such table in the case")
             # an optional table may be absent from the file (its fields have defaults): create it and

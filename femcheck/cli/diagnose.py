@@ -40,9 +40,13 @@ def register(app: typer.Typer) -> None:
             check_output_file(json_out, "--json")
         if report:
             check_output_dir(report, "--report")
-        case = load_case_for(case_path, "diagnose", kinds=("haptic_6psu", "serial_tree", "serial_robot"))
+        case = load_case_for(case_path, "diagnose", kinds=("haptic_6psu", "serial_tree", "serial_robot", "parallel_device"))
         if case.meta.kind in ("serial_tree", "serial_robot"):
             return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds)
+        if case.meta.kind == "parallel_device":
+            from femcheck.cli._parallel_device import diagnose as diagnose_parallel
+            return diagnose_parallel(case, case_path, measured, model=model.value,
+                                     joints=joints.value if joints else None, json_out=json_out)
         for out in ((json_out,) if json_out != "-" else ()) + \
                 ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:

@@ -41,9 +41,14 @@ def register(app: typer.Typer) -> None:
         if out.suffix.lower() != ".png":
             raise typer.BadParameter(f"--out: {str(out)!r}; expected a .png file name (the map is a PNG picture)")
         check_output_file(out)
-        case = load_case_for(case_path, "map")
+        case = load_case_for(case_path, "map", kinds=("haptic_6psu", "parallel_device"))
         refuse_input_overwrite(out, [case_path])
-        smap = stiffness_map(case, direction, z, model.value, joints.value if joints else None, half_width, resolution)
+        if case.kind == "parallel_device":
+            from femcheck.parallel.stiffness_map import stiffness_map as parallel_stiffness_map
+            smap = parallel_stiffness_map(case, direction, z, model.value, joints.value if joints else None, half_width,
+                                          resolution)
+        else:
+            smap = stiffness_map(case, direction, z, model.value, joints.value if joints else None, half_width, resolution)
         if not np.isfinite(smap.k).any():
             raise FemcheckError(f"--z {z}: no grid point of the {2 * half_width:g} m square at z = {smap.z * 1e3:.0f} mm "
                                 f"is reachable; nothing written to {out} (--z is measured from the test-cube centre)")

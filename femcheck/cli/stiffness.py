@@ -30,8 +30,13 @@ def register(app: typer.Typer) -> None:
         """6x6 stiffness at the TCP, deflection under a wrench, and the element contributions (seed 000 Fig. 23).
 
         The detailed model's Hertz contacts are linearized at the given wrench (CONVENTIONS.md §6).
+        Also takes parallel_device cases (hexapods, Delta robots, ...; docs/parallel_device.md).
         """
-        case = load_case_for(case_path, "stiffness")
+        case = load_case_for(case_path, "stiffness", kinds=("haptic_6psu", "parallel_device"))
+        if case.kind == "parallel_device":
+            from femcheck.cli import _parallel_device
+            return _parallel_device.stiffness(case, case_path, model=model.value, joints=joints.value if joints else None,
+                                              point=point, pose=pose, wrench=wrench, json_out=json_out)
         P, label = select_pose(case, point, pose)
         if not (np.isfinite(max_condition) and max_condition > 1):
             raise typer.BadParameter(f"--max-condition: {max_condition}; expected a finite number > 1")

@@ -77,7 +77,9 @@ def register(app: typer.Typer) -> None:
                                      f"(got --model {model.value})")
         fe_level_value = (fe_level or FELevel.detailed).value
         mesh_value = (mesh or MeshLevel.coarse).value
-        case = load_case_for(case_path, "sweep")
+        case = load_case_for(case_path, "sweep", kinds=("haptic_6psu", "parallel_device"))
+        if case.kind == "parallel_device" and model == SweepModel.fe:
+            raise typer.BadParameter("--model fe: not available for parallel_device cases yet; use simplified or detailed")
         ranges = parse_params(case, list(param))
         pts = parse_points(points)
         out_dir = Path(out) if out else Path("reports/sweep") / Path(case_path).stem

@@ -40,6 +40,9 @@ def register(app: typer.Typer) -> None:
     ):
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
+        A parallel_device case (docs/parallel_device.md) is verified against the beam FE of its description:
+        errors_<level>.csv/.md in --out; --mesh, --jobs, --vtu, --joint-fe and the baselines do not apply.
+
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
         rel_error_pct (%); the detailed file compares the contact-joint FE with both idealizations, and
         errors_detailed_matched.csv the FE with the same idealization), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
@@ -52,7 +55,10 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
-        case = load_case_for(case_path, "verify")
+        case = load_case_for(case_path, "verify", kinds=("haptic_6psu", "parallel_device"))
+        if case.kind == "parallel_device":
+            from femcheck.cli._parallel_device import verify
+            return verify(case, case_path, levels=LEVEL_CHOICES[level], points=points, out=out, force=force, check=check)
         pts = None
         if points:
             pts = [p.strip().upper() for p in points.split(",") if p.strip()]

@@ -90,7 +90,6 @@ def per_sample(table, m: int, n_pts: int, column: str) -> np.ndarray:
 
 def analyse(outcome) -> SweepAnalysis:
     """Analyse a :class:`femcheck.sweep.run.SweepOutcome` (see the module docstring)."""
-    from femcheck.chain import ELEMENT_NAMES, ELEMENTS
     des, ranges, table = outcome.design, outcome.ranges, outcome.table
     m, n_pts = des.m, len(outcome.points)
     ids = np.asarray(table.column("sample_id").to_numpy()).reshape(m, n_pts)
@@ -100,7 +99,9 @@ def analyse(outcome) -> SweepAnalysis:
     ok = np.asarray(table.column("ok").to_numpy(zero_copy_only=False), bool).reshape(m, n_pts).all(axis=1)
     k_min = {d: per_sample(table, m, n_pts, f"k_{dir_tag(d)}_N_per_m").min(axis=1) for d in directions}
     k_all = np.min(np.stack(list(k_min.values())), axis=0)
-    shares = {ELEMENT_NAMES[e]: per_sample(table, m, n_pts, f"share_{ELEMENT_NAMES[e]}").mean(axis=1) for e in ELEMENTS}
+    # the element kinds are the table's share columns (the 6-PSU's five, or a parallel device's)
+    shares = {c[len("share_"):]: per_sample(table, m, n_pts, c).mean(axis=1) for c in table.column_names
+              if c.startswith("share_")}
     mass = per_sample(table, m, n_pts, "mass_kg")[:, 0]
     P = des.values
     elasticity, r2 = {}, {}

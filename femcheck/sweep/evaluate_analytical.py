@@ -76,14 +76,63 @@ def element_mass_kg(case, overrides: dict[str, np.ndarray] | None = None) -> np.
     return 6.0 * (m_lg + m_pl + m_ball + m_pin)
 
 
-def result_columns(keys, directions) -> list[str]:
-    """Names of the numeric result columns, in table order (after sample_id, sample_key, point)."""
+def element_names(case) -> tuple[str, ...]:
+    """The element kinds whose shares a sweep stores: the 6-PSU's five, or a parallel device's."""
+    if getattr(case, "kind", "haptic_6psu") == "parallel_device":
+        return case.device.element_names
     from femcheck.chain import ELEMENT_NAMES, ELEMENTS
+    return tuple(ELEMENT_NAMES[e] for e in ELEMENTS)
+
+
+def result_columns(keys, directions, names=None) -> list[str]:
+    """Names of the numeric result columns, in table order (after sample_id, sample_key, point); ``names``:
+    the element kinds (default the 6-PSU's)."""
+    if names is None:
+        from femcheck.chain import ELEMENT_NAMES, ELEMENTS
+        names = [ELEMENT_NAMES[e] for e in ELEMENTS]
     cols = [f"p:{k}" for k in keys]
     for dname in directions:
         cols += [f"k_{dir_tag(dname)}_N_per_m", f"defl_{dir_tag(dname)}_m"]
-    cols += [f"share_{ELEMENT_NAMES[e]}" for e in ELEMENTS] + ["mass_kg"]
+    cols += [f"share_{n}" for n in names] + ["mass_kg"]
     return cols
+
+
+def _parallel_block(case, poses, model, joints):
+    """:func:`_evaluate_block` for a ``parallel_device`` case (every swept key is a case variant here)."""
+    from femcheck.parallel.chain_model import evaluate
+    from femcheck.parallel.leg_kinematics import solve_legs
+    dev = case.device
+    state = solve_legs(dev, poses)
+    if not state.ok.all():
+        raise FemcheckError(f"{int((~state.ok).sum())} of {len(poses)} poses not reachable by the legs")
+    F = case.loads.test_N
+    out = {}
+    shares = np.zeros((poses.shape[0], len(dev.element_names)))
+    for dname in case.loads.directions:
+        dvec = dir_vector(dname)
+        r = evaluate(dev, poses, np.concatenate([F * dvec, np.zeros(3)]), model=model,
+                     joints=joints or case.model.joint_rotations, state=state)
+        defl = r.twist[:, :3] @ dvec
+        out[f"k_{dir_tag(dname)}_N_per_m"] = F / defl
+        out[f"defl_{dir_tag(dname)}_m"] = defl
+        shares += np.nan_to_num(r.contributions)
+    shares /= len(case.loads.directions)
+    for j, name in enumerate(dev.element_names):
+        out[f"share_{name}"] = shares[:, j]
+    out["mass_kg"] = np.full(poses.shape[0], parallel_mass_kg(case))
+    return out
+
+
+def parallel_mass_kg(case) -> float:
+    """Mass of the links of a parallel device at its home pose (kg): density x section area x length, every leg.
+    Drives, joints and the platform are not included (the figure ranks designs by the mass the sizes add)."""
+    m = 0.0
+    for leg, spec in zip(case.device.legs, case.legs * case.symmetry.copies):
+        for ln, ls in zip(leg.links, spec.links):
+            if ln.section is not None:
+                m += ls.material.density_kg_m3 * float(ln.section.A) * float(np.linalg.norm(
+                    leg.centres[ln.end] - leg.centres[ln.start]))
+    return m
 
 
 def _evaluate_block(case, poses, n_pts, overrides, model, joints):
@@ -91,6 +140,8 @@ def _evaluate_block(case, poses, n_pts, overrides, model, joints):
 
     Returns dict column -> (k n_pts,) array. Raises femcheck/LinAlg errors for the caller to isolate.
     """
+    if getattr(case, "kind", "haptic_6psu") == "parallel_device":
+        return _parallel_block(case, poses, model, joints)
     from femcheck.chain import ELEMENT_NAMES, ELEMENTS, device_parameters, evaluate
     k = len(next(iter(overrides.values()))) // n_pts if overrides else poses.shape[0] // n_pts
     params = device_parameters(case, overrides) if overrides else None
@@ -119,7 +170,10 @@ def run_analytical_task(task: AnalyticalTask) -> dict[str, np.ndarray]:
     Columns: sample_id, sample_key, point, ``p:<key>`` ..., the result columns of the module docstring, ok.
     """
     from femcheck.kinematics.points import point_index
-    from femcheck.kinematics.psu6 import test_points
+    if getattr(task.case, "kind", "haptic_6psu") == "parallel_device":
+        from femcheck.parallel.device import test_points
+    else:
+        from femcheck.kinematics.psu6 import test_points
     if task.model not in MODELS:
         raise FemcheckError(f"model {task.model!r}: not an analytical model; expected one of {list(MODELS)}")
     case = task.case
@@ -128,7 +182,7 @@ def run_analytical_task(task: AnalyticalTask) -> dict[str, np.ndarray]:
     n_pts, k = len(idx), task.n_samples
     array_cols = [j for j, kind in enumerate(task.kinds) if kind == "array"]
     variant_cols = [j for j, kind in enumerate(task.kinds) if kind == "variant"]
-    cols = result_columns(task.keys, case.loads.directions)
+    cols = result_columns(task.keys, case.loads.directions, element_names(case))
     table = {c: np.full(k * n_pts, np.nan) for c in cols[len(task.keys):]}
     ok = np.ones(k * n_pts, dtype=bool)
     failures: list[tuple[int, str]] = []

@@ -117,6 +117,15 @@ def _field_of(case, key: str):
             names = [m.name for m in case.materials]
             raise CaseError(case.source, key, f"material {parts[1]!r} is not defined; defined: {names}") from None
         name = parts[2]
+    elif len(parts) > 2 and all(p.isdigit() for p in parts[1:-1:2]):
+        # an entry of an array of tables (parallel_device legs): legs.0.links.1.outer_diameter_m
+        obj = case
+        for name_, index in zip(parts[:-1:2], parts[1:-1:2]):
+            seq = getattr(obj, name_, None)
+            if not isinstance(seq, tuple) or int(index) >= len(seq):
+                raise CaseError(case.source, key, f"no entry {name_}[{index}] in the case")
+            obj = seq[int(index)]
+        name = parts[-1]
     else:
         if len(parts) != 2:
             raise CaseError(case.source, key, "expected SECTION.KEY, e.g. guideway.width_radial_m")
@@ -130,7 +139,8 @@ def _field_of(case, key: str):
     if name not in fields:
         numeric = sorted(n for n, f in fields.items() if typing.get_type_hints(type(obj)).get(n) is float)
         raise CaseError(case.source, key, f"unknown key; numeric keys of this table: {numeric}")
-    if typing.get_type_hints(type(obj)).get(name) is not float:
+    hint = typing.get_type_hints(type(obj)).get(name)
+    if not (hint is float or (hint == float | None and isinstance(getattr(obj, name), float))):
         raise CaseError(case.source, key, "not a continuous quantity (only float keys can be swept)")
     return float(getattr(obj, name)), fields[name].metadata.get("unit", "")
 
@@ -146,6 +156,8 @@ def classify(case, key: str) -> str:
     """"array" if :func:`femcheck.chain.device_parameters` takes ``key`` as an array, else "variant"."""
     from femcheck.chain import device_parameters
     value, _ = _field_of(case, key)
+    if getattr(case, "kind", "haptic_6psu") != "haptic_6psu":
+        return "variant"  # only the 6-PSU kernel takes element parameters as arrays
     try:
         device_parameters(case, {key: np.array([value])})
     except ValueError:

@@ -1,0 +1,319 @@
+"""A parallel device described leg by leg in the case file (issue 19): hexapods, Delta-type robots, ...
+
+TOML layout (SI; positions in the base frame at the *home pose*)::
+
+    [meta]        kind = "parallel_device", name, reference
+    [model]       joint_rotations = "rigid" | "released", beam_shear = false
+    [materials.NAME]  E_Pa, nu, density_kg_m3
+    [platform]    home_pose = [x, y, z, rx, ry, rz] (m, rad; rotation vector), tcp_offset_m = [0, 0, 0]
+    [symmetry]    copies = N        every [[legs]] entry is repeated N times about the base z axis (360/N deg)
+    [workspace]   nominal_tcp_m, cube_edge_m, corner_signs (8 sign triples), rotation = [rx, ry, rz]
+    [loads]       test_N, directions
+    [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
+        joints[k]  type = "R" | "U" | "S" | "P" | "F" (a clamp, first joint only), actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
+                   P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
+                   hertz_point (S), hertz_line (R/U)
+        links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
+                   "rigid", material, outer/inner_diameter_m (tube), width_m/depth_m (bar), x_axis (section x)
+
+A P joint has no centre: it sits inside the link between its neighbouring centred joints and slides along
+it (a telescopic strut). The last joint's centre is the leg's platform attachment; the platform frame at
+the home pose fixes where it is in the platform. The model is :mod:`femcheck.parallel`; the page
+``docs/parallel_device.md`` is an annotated template.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from femcheck.case.schema import (CaseMeta as Meta, CaseRecord, Context, Material, build_materials, build_section,
+                                  build_sections, option, quantity)
+
+CASE_KIND = "parallel_device"
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    joint_rotations: Literal["rigid", "released"] = option(
+        "released", doc="rigid: passive joints carry moments; released: ideal joints (free passive rotations)")
+    beam_shear: bool = option(False, doc="add Timoshenko shear L/(kappa G A) to the lateral beam terms")
+
+
+@dataclass(frozen=True)
+class Platform:
+    home_pose: tuple[float, float, float, float, float, float] = quantity(
+        "m, rad", check="any", doc="platform frame at the home pose (the joint points are given there)")
+    tcp_offset_m: Vec3 = quantity("m", check="any", default=(0.0, 0.0, 0.0), doc="TCP in the platform frame")
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    copies: int = quantity("-", default=1, doc="rotational copies of the listed legs about the base z axis")
+
+
+@dataclass(frozen=True)
+class Workspace:
+    nominal_tcp_m: Vec3 = quantity("m", check="any", doc="P0, centre of the test cube")
+    cube_edge_m: float = quantity("m", doc="edge of the test cube")
+    corner_signs: tuple[tuple[int, int, int], ...] = quantity(
+        "-", check="any", default=((-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1),
+                                   (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)), doc="P1..P8 sign triples")
+    rotation: Vec3 = quantity("rad", check="any", default=(0.0, 0.0, 0.0), doc="platform rotation vector at every test point")
+
+    def __post_init__(self):
+        if len(self.corner_signs) != 8 or any(abs(s) != 1 for row in self.corner_signs for s in row):
+            raise ValueError("corner_signs: expected 8 triples of +-1")
+
+
+@dataclass(frozen=True)
+class Loads:
+    test_N: float = quantity("N", default=10.0, doc="TCP test force (the Hertz contacts are linearized at it)")
+    directions: tuple[str, ...] = option(("+x", "-x", "+y", "-y", "+z", "-z"), doc="TCP load directions")
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Drive train of the actuated joint: a spring along the P axis (``axial``) or about the R axis (``torsional``).
+
+    Either ``stiffness`` (N/m or N m/rad) directly, or its ingredients (``femcheck.compliance.actuation``):
+    axial = cable (E A / l) in series with the motor shaft torsion seen through the capstan; torsional =
+    shaft torsion G J / L times ``gear_ratio``^2 (gearbox taken rigid).
+    """
+    law: Literal["axial", "torsional"] = option(doc="axial (P joint) or torsional (R joint)")
+    stiffness: float | None = quantity("N/m | N m/rad", default=None)
+    cable_diameter_m: float | None = quantity("m", default=None)
+    cable_modulus_Pa: float | None = quantity("Pa", default=None)
+    cable_length_m: float | None = quantity("m", default=None)
+    shaft_diameter_m: float | None = quantity("m", default=None)
+    shaft_length_m: float | None = quantity("m", default=None)
+    shaft_G_Pa: float | None = quantity("Pa", default=None)
+    capstan_radius_m: float | None = quantity("m", default=None)
+    gear_ratio: float = quantity("-", default=1.0)
+
+    def __post_init__(self):
+        if self.stiffness is not None:
+            return
+        shaft = ("shaft_diameter_m", "shaft_length_m", "shaft_G_Pa")
+        need = shaft + (("cable_diameter_m", "cable_modulus_Pa", "cable_length_m", "capstan_radius_m")
+                        if self.law == "axial" else ())
+        missing = [k for k in need if getattr(self, k) is None]
+        if missing:
+            raise ValueError(f"{missing[0]}: required for a {self.law} drive without 'stiffness'")
+
+    @property
+    def compliance(self) -> float:
+        """Drive compliance: m/N (axial) or rad/(N m) (torsional)."""
+        if self.stiffness is not None:
+            return 1.0 / self.stiffness
+        from femcheck.compliance.actuation import cable_stiffness, motor_stiffness_at_cable
+        if self.law == "axial":
+            k_c = cable_stiffness(self.cable_modulus_Pa, self.cable_diameter_m, self.cable_length_m)
+            k_m = motor_stiffness_at_cable(self.shaft_G_Pa, self.shaft_diameter_m, self.shaft_length_m,
+                                           self.capstan_radius_m)
+            return float(1.0 / k_c + 1.0 / (k_m * self.gear_ratio**2))
+        K_rotor = motor_stiffness_at_cable(self.shaft_G_Pa, self.shaft_diameter_m, self.shaft_length_m, 1.0)
+        return float(1.0 / (K_rotor * self.gear_ratio**2))
+
+
+@dataclass(frozen=True)
+class HertzPoint:
+    """Ball in a seat at an S joint centre (``femcheck.compliance.hertz_point_contact``), linearized at the joint's
+    own force under the test wrench (floored at ``min_contact_force_N``)."""
+    ball_radius_m: float = quantity("m")
+    ball_material: Material = option()
+    seat_material: Material = option()
+    seat_curvature_1_per_m: float = quantity("1/m", check="any", default=0.0, doc="0 flat; concave seat -1/R_s")
+    min_contact_force_N: float = quantity("N", default=1.0)
+
+    def __post_init__(self):
+        if 1.0 / self.ball_radius_m + self.seat_curvature_1_per_m <= 0:
+            raise ValueError("seat_curvature_1_per_m: 1/R_ball + curvature must be > 0")
+
+
+@dataclass(frozen=True)
+class HertzLine:
+    """Pins in bores at an R or U joint (``femcheck.compliance.hertz_line_contact``): line contact in every
+    direction, plus pin bending along the adjacent link's axis; load-independent."""
+    pin_radius_m: float = quantity("m")
+    contact_length_m: float = quantity("m")
+    pin_span_m: float = quantity("m")
+    pin_material: Material = option()
+    bore_material: Material = option()
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    type: Literal["R", "U", "S", "P", "F"] = option(
+        doc="revolute, universal, spherical, prismatic; F: a fixed clamp (only first: the leg starts with a clamped link)")
+    actuated: bool = option(False, doc="the driven joint of the leg (R or P)")
+    point_m: Vec3 | None = quantity("m", check="any", default=None, doc="centre at the home pose (R, U, S)")
+    axes: tuple[Vec3, ...] | None = quantity("-", check="any", default=None, doc="joint axes at the home pose")
+    limits: tuple[float, float] | None = quantity("m | rad", check="any", default=None,
+                                                  doc="range of an R or P joint, from its home value (reach check)")
+    drive: Drive | None = option(None)
+    hertz_point: HertzPoint | None = option(None)
+    hertz_line: HertzLine | None = option(None)
+
+    def __post_init__(self):
+        if self.type == "P" and self.point_m is not None:
+            raise ValueError("point_m: a P joint has no centre; it slides inside the link between its neighbours")
+        if self.type != "P" and self.point_m is None:
+            raise ValueError(f"point_m: required for a {self.type} joint (its centre at the home pose)")
+        if self.actuated and self.type not in ("R", "P"):
+            raise ValueError(f"actuated: a {self.type} joint cannot be actuated; expected R or P")
+        if self.actuated and self.drive is None:
+            raise ValueError("drive: required for the actuated joint")
+        if self.drive is not None and not self.actuated:
+            raise ValueError("drive: only the actuated joint has a drive")
+        if self.drive is not None and self.drive.law != {"P": "axial", "R": "torsional"}[self.type]:
+            raise ValueError(f"drive.law: {self.drive.law!r} does not fit a {self.type} joint")
+        if self.limits is not None and (self.type not in ("R", "P") or not self.limits[0] < 0 < self.limits[1]):
+            raise ValueError("limits: only for an R or P joint, as [low, high] around its home value 0")
+        if self.hertz_point is not None and self.type != "S":
+            raise ValueError("hertz_point: only on an S joint")
+        if self.hertz_line is not None and self.type not in ("R", "U"):
+            raise ValueError("hertz_line: only on an R or U joint")
+        n_axes = {"R": (1,), "U": (1, 2), "S": (3,), "P": (1,), "F": (0,)}[self.type]
+        if self.axes is not None and len(self.axes) not in n_axes:
+            raise ValueError(f"axes: {len(self.axes)} given; a {self.type} joint takes {' or '.join(map(str, n_axes))}")
+        if self.type == "R" and self.axes is None:
+            raise ValueError("axes: required for an R joint (its axis at the home pose)")
+        if self.axes is not None:
+            A = np.asarray(self.axes, dtype=float)
+            if np.any(np.linalg.norm(A, axis=1) < 1e-12):
+                raise ValueError("axes: contains a zero vector")
+            A = A / np.linalg.norm(A, axis=1, keepdims=True)
+            if len(A) > 1 and np.abs(A @ A.T - np.eye(len(A))).max() > 1e-6:
+                raise ValueError("axes: the axes of one joint must be mutually orthogonal")
+
+
+@dataclass(frozen=True)
+class LinkSpec:
+    element: Literal["tube", "bar", "rigid"] = option(doc="cantilever tube (round), cantilever bar (rectangle) or rigid")
+    name: str = option("link", doc="element name in contributions (e.g. strut, crank, rod)")
+    material: Material | None = option(None)
+    outer_diameter_m: float | None = quantity("m", default=None)
+    inner_diameter_m: float = quantity("m", check="nonnegative", default=0.0)
+    width_m: float | None = quantity("m", default=None, doc="bar, along the section x axis")
+    depth_m: float | None = quantity("m", default=None, doc="bar, along the section y axis")
+    x_axis: Vec3 | None = quantity("-", check="any", default=None,
+                                   doc="section x axis at the home pose (default: normal to the link, horizontal)")
+
+    def __post_init__(self):
+        if self.element != "rigid" and self.material is None:
+            raise ValueError(f"material: required for a {self.element} link")
+        if self.element == "tube":
+            if self.outer_diameter_m is None:
+                raise ValueError("outer_diameter_m: required for a tube")
+            if self.inner_diameter_m >= self.outer_diameter_m:
+                raise ValueError(f"inner_diameter_m: = {self.inner_diameter_m}; expected < outer_diameter_m")
+        if self.element == "bar" and (self.width_m is None or self.depth_m is None):
+            raise ValueError("width_m: a bar needs width_m and depth_m")
+
+
+@dataclass(frozen=True)
+class LegSpec:
+    joints: tuple[JointSpec, ...] = option(doc="base to platform")
+    links: tuple[LinkSpec, ...] = option(doc="one per pair of consecutive centred joints")
+    name: str = option("leg")
+
+
+@dataclass(frozen=True)
+class ParallelDeviceCase(CaseRecord):
+    """A validated parallel device case. Immutable; the resolved legs are :attr:`device`."""
+
+    meta: Meta
+    model: ModelOptions
+    materials: tuple[Material, ...]
+    platform: Platform
+    symmetry: Symmetry
+    workspace: Workspace
+    loads: Loads
+    legs: tuple[LegSpec, ...]
+
+    kind = CASE_KIND
+
+    def material(self, name: str) -> Material:
+        for m in self.materials:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+    @property
+    def device(self):
+        """The legs resolved into arrays (:class:`femcheck.parallel.device.ParallelDevice`), cached per case."""
+        return _device(self)
+
+    @property
+    def n_legs(self) -> int:
+        return len(self.legs) * self.symmetry.copies
+
+
+@functools.lru_cache(maxsize=32)
+def _device(case):
+    from femcheck.parallel.device import device_from_case
+    return device_from_case(case)
+
+
+SECTIONS = {"meta": Meta, "model": ModelOptions, "platform": Platform, "symmetry": Symmetry,
+            "workspace": Workspace, "loads": Loads}
+
+
+def _check_leg(ctx: Context, i: int, leg: LegSpec) -> None:
+    """Cross-joint checks of one leg; the error names the leg (its index in the file and its name)."""
+    where = f"legs[{i}]"
+    who = f"leg {i} ({leg.name!r})"
+    j = leg.joints
+    if len(j) < 2:
+        raise ctx.error(f"{where}.joints", f"{who} has {len(j)} joint(s); expected at least 2 (base and platform)")
+    if j[0].type == "P" or j[-1].type in ("P", "F"):
+        raise ctx.error(f"{where}.joints", f"{who}: the first and last joints must have a centre (R, U or S; F first), "
+                                           f"not {j[0].type if j[0].type == 'P' else j[-1].type}")
+    if any(jt.type == "F" for jt in j[1:]):
+        raise ctx.error(f"{where}.joints", f"{who}: an F (clamp) joint can only be the first joint")
+    act = [k for k, jt in enumerate(j) if jt.actuated]
+    if len(act) != 1:
+        raise ctx.error(f"{where}.joints", f"{who} has {len(act)} actuated joints; expected exactly one")
+    for k in range(1, len(j)):
+        if j[k].type == "P" and j[k - 1].type == "P":
+            raise ctx.error(f"{where}.joints[{k}]", f"{who}: two P joints in one link")
+    centred = [jt for jt in j if jt.type != "P"]
+    if len(leg.links) != len(centred) - 1:
+        raise ctx.error(f"{where}.links", f"{who} has {len(leg.links)} links; expected {len(centred) - 1} "
+                                          f"(one between each pair of consecutive R/U/S joints)")
+    pts = np.array([jt.point_m for jt in centred], dtype=float)
+    lengths = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    if np.any(lengths < 1e-9):
+        k = int(np.argmin(lengths))
+        raise ctx.error(f"{where}.links[{k}]", f"{who}: link {k} has zero length at the home pose")
+    dof = sum({"R": 1, "U": 2, "S": 3, "P": 1, "F": 0}[jt.type] for jt in j)
+    if dof < 3:
+        raise ctx.error(f"{where}.joints", f"{who} has {dof} joint freedoms; a leg needs at least 3")
+
+
+def build(raw: dict, path) -> ParallelDeviceCase:
+    """Validate a parsed TOML document into a :class:`ParallelDeviceCase` (errors name the file, key and leg)."""
+    ctx = Context(path)
+    ctx.materials = build_materials(ctx, raw.get("materials"))
+    parts = build_sections(ctx, raw, SECTIONS, optional=("meta", "model", "symmetry", "loads"),
+                           also_allowed=("materials", "legs"))
+    legs_raw = raw.get("legs")
+    if not isinstance(legs_raw, list) or not legs_raw:
+        raise ctx.error("legs", "expected at least one [[legs]] table")
+    legs = tuple(build_section(ctx, f"legs[{i}]", LegSpec, t) for i, t in enumerate(legs_raw))
+    for i, leg in enumerate(legs):
+        _check_leg(ctx, i, leg)
+    case = ParallelDeviceCase(materials=tuple(ctx.materials.values()), legs=legs, **parts)
+    # resolve the legs once: the home configuration must close (platform attachment consistent) and every
+    # test point be reachable; the error names the first leg that is not
+    from femcheck.parallel.device import DeviceError, device_from_case
+    try:
+        device_from_case(case, check_points=True)
+    except DeviceError as exc:
+        raise ctx.error(exc.key, str(exc)) from None
+    return case

@@ -1,0 +1,160 @@
+"""The ``parallel_device`` side of ``femcheck stiffness`` (issue 19): the same table layout as the 6-PSU path,
+computed by :mod:`femcheck.parallel`."""
+from __future__ import annotations
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from femcheck.cli import console
+from femcheck.cli._common import emit_json, parse_vector
+from femcheck.parallel.chain_model import evaluate
+from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.parallel.leg_kinematics import actuation_jacobian, solve_legs
+
+
+def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, str]:
+    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0."""
+    if point and pose:
+        raise typer.BadParameter("give either --point or --pose, not both")
+    if pose:
+        return parse_vector(pose, 6, "--pose")[None, :], f"[{pose}]"
+    label = (point or "P0").upper()
+    if label not in POINT_LABELS:
+        raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(POINT_LABELS)}")
+    return test_points(case)[[POINT_LABELS.index(label)]], label
+
+
+def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, wrench, json_out) -> None:
+    P, label = select_pose(case, point, pose)
+    dev = case.device
+    state = solve_legs(dev, P)
+    if not state.ok[0]:
+        leg = next(i for i, s in enumerate(state.legs) if not s.ok[0])
+        raise typer.BadParameter(f"pose {label} is not reachable by leg {leg} ({dev.legs[leg].name!r}): "
+                                 "no inverse-kinematics solution inside the joint limits")
+    W = parse_vector(wrench, 6, "--wrench") if wrench else np.array([0, 0, case.loads.test_N, 0, 0, 0.0])
+    r = evaluate(dev, P, W, model=model, joints=joints or case.model.joint_rotations, state=state)
+    contrib = {name: float(r.contributions[0, j]) for j, name in enumerate(r.element_names)
+               if r.element_energy[0, :, j].any()}
+    work = float(W @ r.twist[0])
+    leg_contrib = {leg.name: {name: float(r.element_energy[0, i, j] / work) for j, name in enumerate(r.element_names)
+                              if r.element_energy[0, i, j]} for i, leg in enumerate(dev.legs)} if work > 0 else {}
+    q_act = [float(s.q[0, leg.actuated_dof]) for leg, s in zip(dev.legs, state.legs)]
+    Ja = actuation_jacobian(dev, state)[0]
+    sv = np.linalg.svd(Ja[:, :3], compute_uv=False)
+    cond = float(sv[0] / sv[-1])
+    if json_out:
+        emit_json({"case": case.source, "pose": P[0].tolist(), "point": label, "model": r.model, "joints": r.joints,
+                   "wrench": W.tolist(), "K": r.K[0].tolist(), "deflection": r.twist[0].tolist(),
+                   "contributions": contrib, "leg_contributions": leg_contrib, "actuated_joints": q_act,
+                   "translational_condition_number": cond},
+                  json_out, inputs=[case_path])
+        return
+    con = console()
+    con.print(f"[bold]{case.meta.name}[/] — {label}, model [bold]{r.model}[/], joints [bold]{r.joints}[/], "
+              f"wrench {np.array2string(W, precision=3)} (N, N m)")
+    kt = Table(title="TCP stiffness K (SI: N/m | N/rad ; N m/m | N m/rad)")
+    for h in ("", "dx", "dy", "dz", "rx", "ry", "rz"):
+        kt.add_column(h, justify="right")
+    K = np.where(np.abs(r.K[0]) < 1e-12 * np.abs(r.K[0]).max(), 0.0, r.K[0])  # rounding noise shown as 0
+    for i, h in enumerate(("Fx", "Fy", "Fz", "Mx", "My", "Mz")):
+        kt.add_row(h, *[f"{v:.4g}" for v in K[i]])
+    con.print(kt)
+    t = r.twist[0]
+    con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
+              f"theta = [{t[3]*1e3:.5f}, {t[4]*1e3:.5f}, {t[5]*1e3:.5f}] mrad")
+    kd = [float(r.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
+    con.print("directional stiffness (1 / compliance along the axis): "
+              + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+    con.print(f"{dev.n_legs} legs; actuated joints (from home, m or rad) {np.array2string(np.array(q_act), precision=4)}; "
+              f"condition number of the actuation Jacobian's translational part {cond:.3f}")
+    ct = Table(title="contributions (share of deflection energy)")
+    ct.add_column("element")
+    ct.add_column("share %", justify="right")
+    for name, v in contrib.items():
+        ct.add_row(name, f"{100*v:.1f}")
+    con.print(ct)
+
+
+#: a parallel device's beam FE uses the analytical element laws, so analytical and FE agree to rounding; a
+#: relative deflection error above this (%) means the chain algebra or the FE assembly is wrong
+VERIFY_THRESHOLD_PCT = 1e-6
+
+
+def verify(case, case_path, *, levels, points, out, force, check) -> None:
+    """Analytical vs beam FE at the test points: errors_<level>.csv / .md in ``out``, a summary on screen."""
+    from femcheck.parallel.verification import verify_device
+    from femcheck.report.atomic import write_text_atomic
+    from femcheck.report.run_folder import prepare_run_folder
+
+    labels = None
+    if points:
+        labels = [p.strip().upper() for p in points.split(",") if p.strip()]
+        bad = [p for p in labels if p not in POINT_LABELS]
+        if bad:
+            raise typer.BadParameter(f"--points: {bad[0]!r}; expected P0..P8")
+    levels = levels or ("simplified", "detailed")
+    prepare_run_folder(out, "femcheck verify", force=force, inputs=[case_path])
+    res = verify_device(case, labels, levels)
+    con = console()
+    for level in levels:
+        rows = [r for r in res.rows if r["level"] == level]
+        write_text_atomic(out / f"errors_{level}.csv", type(res)(rows=tuple(rows)).to_csv())
+        write_text_atomic(out / f"errors_{level}.md", type(res)(rows=tuple(rows)).to_markdown())
+        t = Table(title=f"{case.meta.name}: {level} analytical vs beam FE (deflection mm under {case.loads.test_N:g} N)")
+        for c in ("joints", "direction", "points", "analytical_mm (min..max)", "max |rel error| %"):
+            t.add_column(c, justify="right")
+        for jt in ("rigid", "released"):
+            for d in case.loads.directions:
+                sel = [r for r in rows if r["joints"] == jt and r["direction"] == d]
+                a = [r["analytical_mm"] for r in sel]
+                t.add_row(jt, d, str(len(sel)), f"{min(a):.5f}..{max(a):.5f}",
+                          f"{max(abs(r['rel_error_pct']) for r in sel):.2e}")
+        con.print(t)
+    con.print(f"beam FE: links as beams, joints as exact releases with the analytical drive and contact springs, "
+              f"rigid platform; max |error| {res.max_abs_error_pct:.2e} % over {len(res.rows)} deflections; wrote "
+              f"{2 * len(levels)} files to {out}")
+    if check and res.max_abs_error_pct > VERIFY_THRESHOLD_PCT:
+        con.print(f"[red]analytical-FE error above {VERIFY_THRESHOLD_PCT:g} %[/]")
+        raise typer.Exit(1)
+
+
+def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out) -> None:
+    """Which element kind, and which leg, the measured deflections put the model's error in."""
+    from femcheck.measured.csv_format import read_measured_csv
+    from femcheck.parallel.diagnosis import diagnose as run
+
+    if json_out and json_out != "-":
+        from femcheck.report.atomic import refuse_input_overwrite
+        refuse_input_overwrite(json_out, [case_path, measured])
+    data = read_measured_csv(measured)
+    try:
+        d = run(case, data, model=model, joints=joints)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), "model": model,
+              "joints": joints or case.model.joint_rotations, **d.as_json()}
+    if json_out:
+        emit_json(result, json_out, inputs=[case_path, measured])
+        if json_out == "-":
+            return
+    con = console()
+    t = Table(title=f"{case.meta.name}: candidate explanations of {measured} ({model} model, "
+                    f"{joints or case.model.joint_rotations} joints)")
+    for c in ("candidate", "factors", "RMS before mm", "RMS after mm"):
+        t.add_column(c, justify="right")
+    for c in d.candidates:
+        t.add_row(c.what, str(len(c.factors)), f"{c.rms_before_mm:.5f}", f"{c.rms_after_mm:.5f}")
+    con.print(t)
+    b = d.best
+    con.print(f"kept (BIC): [bold]{b.what}[/]: " + ", ".join(f"{n} x{f:.3g}" for n, f in zip(b.names, b.factors)))
+    con.print(f"RMS {b.rms_before_mm:.5f} mm -> {b.rms_after_mm:.5f} mm; held out (leave one point out) "
+              f"{b.held_out_rms_mm:.5f} mm")
+    if not d.effects:
+        con.print("no element's compliance moved beyond the threshold: the model explains the data")
+    elif d.leg is not None:
+        con.print(f"effect located: [bold]{b.what.removesuffix(' by leg')}[/] of leg [bold]{d.leg[0]}[/] "
+                  f"x{d.leg[1]:.3g} of its modelled compliance")
+    else:
+        con.print("effect: " + ", ".join(f"[bold]{n}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")

@@ -1,0 +1,161 @@
+"""Beam FE of a parallel device from its case description (issue 19 item 3, beam parts).
+
+Every link is meshed with 3D two-node beams (:mod:`femcheck.fe.beam`, Euler-Bernoulli unless the case asks
+for shear), split at the middle where a P joint sits in it. Each joint is a pair of nodes at its centre
+whose twists differ by ``B y``: the columns of B are the joint's released freedoms (unit twists ``[0; w]`` of
+its rotations, ``[u; 0]`` of a slide; free, only with ``released`` joints), its drive (``detailed``: a spring
+of stiffness 1/c on the actuated freedom) and its contact law (``detailed``: translational springs, Hertz
+point contact at the analytical model's linearization, or line contact + pin bending in the link frame);
+every other relative motion is locked. The base side of the first joint is fixed; the platform is rigid, so
+the platform side of each last joint moves with the TCP twist (``G_i t_T``). The nodes are expressed by a
+master-slave transformation (exact, no penalty) and everything but the TCP twist is condensed out:
+``K_T = K_tt - K_to K_oo^-1 K_ot``.
+
+With the analytical model's element laws this reproduces :func:`femcheck.parallel.chain_model.evaluate`
+exactly in exact arithmetic (a cantilever's tip compliance is exact for beam elements), so the test asks
+1e-8; what it checks is the chain algebra (carrying compliances, the null-space treatment of released
+joints, the rigid platform sum) by an independent route.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from femcheck.fe.beam import BeamSection, assemble_beam_stiffness
+from femcheck.parallel.leg_kinematics import DeviceState, solve_legs
+
+
+class _Model:
+    """Nodes as linear expressions of master coordinates ({first master index: (6, k) matrix})."""
+
+    def __init__(self):
+        self.n_master = 6  # the TCP twist
+        self.nodes: list[tuple[np.ndarray, dict]] = []
+        self.springs: list[tuple[int, np.ndarray]] = []
+        self.beams: list[tuple] = []  # (node a, node b, E, G, section, orientation, shear)
+
+    def master(self, k: int) -> int:
+        s = self.n_master
+        self.n_master += k
+        return s
+
+    def node(self, pos, expr: dict) -> int:
+        self.nodes.append((np.asarray(pos, float), expr))
+        return len(self.nodes) - 1
+
+    def master_node(self, pos) -> int:
+        return self.node(pos, {self.master(6): np.eye(6)})
+
+    def stiffness(self) -> np.ndarray:
+        T = np.zeros((6 * len(self.nodes), self.n_master))
+        for i, (_, expr) in enumerate(self.nodes):
+            for s, M in expr.items():
+                T[6 * i:6 * i + 6, s:s + M.shape[1]] += M
+        K = np.zeros((self.n_master, self.n_master))
+        for a, b, E, G, sec, orient, shear in self.beams:
+            pts = np.array([self.nodes[a][0], self.nodes[b][0]])
+            Ke = assemble_beam_stiffness(pts, [[0, 1]], E, G, sec, orientation=orient, shear=shear).toarray()
+            Te = np.vstack([T[6 * a:6 * a + 6], T[6 * b:6 * b + 6]])
+            K += Te.T @ Ke @ Te
+        for s, k in self.springs:
+            K[s:s + len(k), s:s + len(k)] += np.diag(k)
+        return K
+
+
+def _plus(expr: dict, s: int, B: np.ndarray, sign: float = 1.0) -> dict:
+    out = dict(expr)
+    if B.shape[1]:  # a joint with no columns is welded
+        out[s] = out.get(s, 0.0) + sign * B
+    return out
+
+
+def _joint_columns(leg, li, k, p, state: DeviceState, model, joints, hertz_stiffness):
+    """(6, m) relative-twist columns of joint k at its centre and their stiffnesses (m,) (0: free)."""
+    s = state.legs[li]
+    cols, ks = [], []
+    for d in np.flatnonzero(leg.dof_joint == k):
+        tw = s.twists[p, d]
+        col = np.concatenate([np.zeros(3), tw[3:]]) if leg.dof_kind[d] == "R" else np.concatenate([tw[:3], np.zeros(3)])
+        if d == leg.actuated_dof:
+            if model == "detailed":
+                cols.append(col), ks.append(1.0 / leg.drive_compliance)
+        elif joints == "released":
+            cols.append(col), ks.append(0.0)
+    if model == "detailed" and k in leg.hertz_point:
+        kh = hertz_stiffness[li, k][p]
+        for a in range(3):
+            cols.append(np.eye(6)[a]), ks.append(kh)
+    if model == "detailed" and k in leg.hertz_line:
+        c_uc, c_ub, m = leg.hertz_line[k]
+        R = s.link_R[p, m]
+        for a, c in enumerate((c_uc, c_uc, c_uc + c_ub)):
+            cols.append(np.concatenate([R[:, a], np.zeros(3)])), ks.append(1.0 / c)
+    if not cols:
+        return np.zeros((6, 0)), np.zeros(0)
+    return np.array(cols).T, np.array(ks)
+
+
+def _beam_section(ln) -> BeamSection:
+    sec = ln.section
+    return BeamSection(A=float(sec.A), Ix=float(sec.Ix), Iy=float(sec.Iy), J=float(sec.Jt),
+                       kappa_x=float(sec.shear_factor), kappa_y=float(sec.shear_factor))
+
+
+def _segment(fe: _Model, a: int, b: int, ln, orient, n_el: int, shear: bool) -> None:
+    if ln.section is None:
+        raise NotImplementedError(f"link {ln.name!r} is rigid; the beam FE meshes only tube and bar links")
+    pa, pb = fe.nodes[a][0], fe.nodes[b][0]
+    ids = [a] + [fe.master_node(pa + (pb - pa) * t) for t in np.arange(1, n_el) / n_el] + [b]
+    sec = _beam_section(ln)
+    for i, j in zip(ids[:-1], ids[1:]):
+        fe.beams.append((i, j, ln.E, ln.G, sec, orient, shear))
+
+
+def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str = "released",
+                        hertz_stiffness: dict | None = None, elements_per_link: int = 2,
+                        state: DeviceState | None = None) -> np.ndarray:
+    """(n, 6, 6) TCP stiffness of the beam FE of ``device`` at TCP poses (n, 6) (m, rad).
+
+    ``hertz_stiffness``: {(leg, joint): (n,)} N/m of the Hertz point contacts (``ParallelResult.hertz_stiffness``);
+    required for a detailed model with Hertz point contacts.
+    """
+    state = state if state is not None else solve_legs(device, poses)
+    if model == "detailed" and any(leg.hertz_point for leg in device.legs) and hertz_stiffness is None:
+        raise ValueError("hertz_stiffness: required for the detailed model (the Hertz contacts' linearization)")
+    out = np.empty((state.n, 6, 6))
+    for p in range(state.n):  # one FE model per pose (each pose is a different mesh)
+        fe = _Model()
+        for li, leg in enumerate(device.legs):
+            s = state.legs[li]
+            G = state.G(li)[p]
+            last = len(leg.centres) - 1
+            cursor, link = None, 0
+            for k, jt in enumerate(leg.joint_types):
+                B, kk = _joint_columns(leg, li, k, p, state, model, joints, hertz_stiffness)
+                y = fe.master(B.shape[1])
+                if kk.size:
+                    fe.springs.append((y, kk))
+                ln = leg.links[min(link, len(leg.links) - 1)]
+                orient = s.link_R[p, min(link, len(leg.links) - 1), :, 0]
+                if jt == "P":
+                    mid = 0.5 * (s.centres[p, ln.start] + s.centres[p, ln.end])
+                    before = fe.master_node(mid)
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+                    cursor = fe.node(mid, _plus(fe.nodes[before][1], y, B))
+                    continue
+                c = int(leg.joint_centre[k])
+                pos = s.centres[p, c]
+                if c == 0:
+                    cursor = fe.node(pos, _plus({}, y, B))
+                elif c < last:
+                    before = fe.master_node(pos)
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+                    cursor = fe.node(pos, _plus(fe.nodes[before][1], y, B))
+                    link = c
+                else:
+                    before = fe.node(pos, _plus({0: G}, y, B, -1.0))
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+        K = fe.stiffness()
+        Ktt, Kto, Koo = K[:6, :6], K[:6, 6:], K[6:, 6:]
+        KT = Ktt - Kto @ np.linalg.solve(Koo, Kto.T)
+        out[p] = 0.5 * (KT + KT.T)
+    return out

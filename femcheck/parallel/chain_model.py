@@ -1,0 +1,188 @@
+"""General compliance-chain model of a parallel device, vectorized over poses (issue 19).
+
+Every leg is a serial chain from the base to its platform attachment C_i. Each element's compliance is
+carried to C_i (frame U) and the elements of a leg add in series, as in the 6-PSU model:
+
+- a link (tube or bar) is a cantilever clamped at its start joint and loaded at its end joint, of its
+  current length (a P joint inside it makes the length vary), ``Jf(C - E)^T Rot S_cant Rot^T Jf(C - E)``;
+- the drive of the actuated joint (detailed level): ``c xi xi^T`` with xi the joint's unit twist at C
+  (a spring along the P axis, or about the R axis);
+- joint contact laws (detailed level): Hertz point contact of an S joint (translational ``I3 / k(F)``,
+  linearized at the force of its own leg under the wrench, fixed point) and Hertz line contact + pin
+  bending of an R or U joint (translational, in the frame of the adjacent link).
+
+Joint idealizations: ``rigid`` (passive joints carry moments and forces: the leg is a welded chain,
+``K_i = S_i^-1``) and ``released`` (passive freedoms free: the leg carries only wrenches reciprocal to them,
+``K_i = N (N^T S_i N)^-1 N^T`` with N a basis of those wrenches; for a UPS leg N = [u; 0] and
+``K_i = k_i g g^T``). The rigid platform sums the legs at the TCP: ``G_i = Jf(C_i - T)^T``,
+``K_T = sum_i G_i^T K_i G_i``, ``t_T = K_T^-1 W_T``, ``W_C,i = K_i G_i t_T``.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
+from femcheck.errors import ConvergenceError, UnreachablePoseError
+from femcheck.kinematics.frames import rot6, twist_shift
+from femcheck.parallel.leg_kinematics import DeviceState, released_wrenches, solve_legs
+
+MODELS = ("simplified", "detailed")
+JOINT_IDEALIZATIONS = ("rigid", "released")
+_FIXED_POINT_TOL = 1e-12
+_FIXED_POINT_MAX_ITER = 200
+
+
+@dataclasses.dataclass(frozen=True)
+class ParallelResult:
+    """Result of :func:`evaluate` at n poses (SI).
+
+    K, S (n, 6, 6): TCP stiffness and compliance; twist (n, 6) under ``wrench`` (n, 6); leg_stiffness
+    (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
+    W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
+    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts.
+    """
+
+    model: str
+    joints: str
+    poses: np.ndarray
+    wrench: np.ndarray
+    K: np.ndarray
+    S: np.ndarray
+    twist: np.ndarray
+    leg_stiffness: np.ndarray
+    leg_wrench: np.ndarray
+    element_names: tuple[str, ...]
+    element_energy: np.ndarray
+    contributions: np.ndarray
+    hertz_stiffness: dict
+    iterations: int
+    state: DeviceState = dataclasses.field(repr=False)
+
+    def directional_stiffness(self, direction) -> np.ndarray:
+        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m."""
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        return 1.0 / np.einsum("i,nij,j->n", d, self.S[:, :3, :3], d)
+
+
+def leg_element_compliances(device, state: DeviceState, model: str = "detailed") -> list[dict[str, np.ndarray]]:
+    """Per leg: {element name: (n, 6, 6) compliance carried to C_i, frame U}, without the Hertz point terms
+    (load-dependent, added by :func:`evaluate`). Links of the same name in one leg add up."""
+    out = []
+    for i, leg in enumerate(device.legs):
+        s = state.legs[i]
+        n = s.C.shape[0]
+        parts: dict[str, np.ndarray] = {}
+        for m, ln in enumerate(leg.links):
+            if ln.section is None:
+                continue
+            S_loc = cantilever_compliance(s.link_length[:, m], ln.E, ln.G, ln.section, device.beam_shear)
+            Q = rot6(s.link_R[:, m])
+            to_C = twist_shift(s.C - s.centres[:, ln.end])
+            S_C = to_C @ Q @ S_loc @ np.swapaxes(Q, -1, -2) @ np.swapaxes(to_C, -1, -2)
+            parts[ln.name] = parts.get(ln.name, 0.0) + S_C
+        if model == "detailed":
+            xi = s.twists[:, leg.actuated_dof, :]
+            parts["drive"] = leg.drive_compliance * xi[:, :, None] * xi[:, None, :]
+            if leg.hertz_line:
+                S = np.zeros((n, 6, 6))
+                for _, (c_uc, c_ub, m) in leg.hertz_line.items():
+                    R = s.link_R[:, m]
+                    S[:, :3, :3] += np.einsum("nij,j,nkj->nik", R, np.array([c_uc, c_uc, c_uc + c_ub]), R)
+                parts["hertz_line"] = S
+        out.append(parts)
+    return out
+
+
+def _leg_stiffness(S, N):
+    """K = N (N^T S N)^-1 N^T, (n, 6, 6)."""
+    A = np.swapaxes(N, -1, -2) @ S @ N
+    K = N @ np.linalg.solve(A, np.swapaxes(N, -1, -2))
+    return 0.5 * (K + np.swapaxes(K, -1, -2))
+
+
+def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str = "released",
+             state: DeviceState | None = None, element_scale=None) -> ParallelResult:
+    """Stiffness, deflection and element breakdown of ``device`` (:class:`~femcheck.parallel.device.ParallelDevice`).
+
+    Parameters
+    ----------
+    poses : (n, 6) float, TCP poses [x, y, z, rx, ry, rz] (m, rad; rotation vector)
+    wrench : (6,) or (n, 6) TCP wrench [F; M] (N, N m), also the load at which the Hertz point contacts are
+        linearized; None = zero load (contacts at their ``min_contact_force_N``)
+    model : "simplified" (links only) or "detailed" (links + drive + joint contact laws)
+    joints : "rigid" or "released"
+    state : the inverse kinematics of ``poses`` if already solved (:func:`solve_legs`)
+    element_scale : (L, E) or (n, L, E) factors on the compliance of element kind e (order
+        ``device.element_names``) in leg i (1 = as modelled, 2 = twice as soft, 0 = rigid): the hook for
+        model extensions and for locating an effect by leg and element
+    """
+    if model not in MODELS:
+        raise ValueError(f"model: {model!r}; expected one of {list(MODELS)}")
+    if joints not in JOINT_IDEALIZATIONS:
+        raise ValueError(f"joints: {joints!r}; expected one of {list(JOINT_IDEALIZATIONS)}")
+    state = state if state is not None else solve_legs(device, poses)
+    n = state.n
+    if not state.ok.all():
+        k = int(np.flatnonzero(~state.ok)[0])
+        leg = next(i for i, s in enumerate(state.legs) if not s.ok[k])
+        raise UnreachablePoseError(f"#{k} {np.array2string(state.poses[k], precision=4)}", leg,
+                                   f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
+    W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
+    parts = leg_element_compliances(device, state, model)
+    names = device.element_names
+    L = device.n_legs
+    scale = np.ones((n, L, len(names))) if element_scale is None else \
+        np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, len(names))))
+    parts = [{name: S * scale[:, i, names.index(name), None, None] for name, S in p.items()} for i, p in enumerate(parts)]
+    G = [state.G(i) for i in range(L)]
+    N = [np.broadcast_to(np.eye(6), (n, 6, 6)) if joints == "rigid" else released_wrenches(leg, state.legs[i])
+         for i, leg in enumerate(device.legs)]
+    S_fixed = [sum(p.values()) if p else np.zeros((n, 6, 6)) for p in parts]
+    hertz = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.hertz_point.items()} if model == "detailed" else {}
+    k_h = {key: hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
+    history = []
+    for it in range(_FIXED_POINT_MAX_ITER):
+        S_leg = [S_fixed[i] + sum(_translational(scale[:, i, names.index("hertz_point")] / k_h[key])
+                                  for key in k_h if key[0] == i) for i in range(L)]
+        K_leg = [_leg_stiffness(S_leg[i], N[i]) for i in range(L)]
+        K_T = sum(np.swapaxes(G[i], -1, -2) @ K_leg[i] @ G[i] for i in range(L))
+        K_T = 0.5 * (K_T + np.swapaxes(K_T, -1, -2))
+        t = np.linalg.solve(K_T, W[..., None])[..., 0]
+        W_C = np.stack([np.einsum("nij,njk,nk->ni", K_leg[i], G[i], t) for i in range(L)], axis=1)
+        if not hertz:
+            break
+        change = 0.0
+        for (i, j), (E, R, F_min) in hertz.items():
+            k_new = hertz_tangent_stiffness(np.maximum(np.linalg.norm(W_C[:, i, :3], axis=1), F_min), E, R)
+            change = max(change, float(np.max(np.abs(k_new - k_h[i, j]) / k_new)))
+            k_h[i, j] = k_new
+        history.append(change)
+        if change < _FIXED_POINT_TOL:
+            break
+    else:
+        raise ConvergenceError("Hertz linearization fixed point of the parallel device did not converge", history)
+    energy = np.zeros((n, L, len(names)))
+    for i in range(L):
+        for name, S_e in parts[i].items():
+            energy[:, i, names.index(name)] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
+        for (li, j) in k_h:
+            if li == i:
+                energy[:, i, names.index("hertz_point")] += (np.sum(W_C[:, i, :3] ** 2, axis=1)
+                                                             * scale[:, i, names.index("hertz_point")] / k_h[li, j])
+    work = np.einsum("ni,ni->n", W, t)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
+    return ParallelResult(model=model, joints=joints, poses=state.poses, wrench=W, K=K_T, S=np.linalg.inv(K_T), twist=t,
+                          leg_stiffness=np.stack(K_leg, axis=1), leg_wrench=W_C, element_names=names,
+                          element_energy=energy, contributions=contributions, hertz_stiffness=k_h,
+                          iterations=len(history) + 1, state=state)
+
+
+def _translational(c):
+    """(n, 6, 6) compliance c I3 on the translations, c (n,)."""
+    S = np.zeros(np.shape(c) + (6, 6))
+    S[..., 0, 0] = S[..., 1, 1] = S[..., 2, 2] = c
+    return S
