@@ -64,3 +64,18 @@ def test_chosen_explanation_is_named_first():
     assert w.best.ids == ("b",) and sum(w.probability) == pytest.approx(1.0)
     with pytest.raises(ValueError):
         weigh(rivals[1:], 400)
+
+
+def test_size_prior_gives_each_explanation_size_equal_mass():
+    """none, the singles and the pairs get a third of the prior each, shared within the size (Scott & Berger 2010);
+    with equal evidence the posterior is that prior (exact: no data term differs)."""
+    from femcheck.diagnose.evidence import Explanation, posterior, size_prior
+    ex = [Explanation((), 10.0, 0)] + [Explanation((a,), 10.0, 0) for a in "abc"] + \
+         [Explanation((a, b), 10.0, 0) for a, b in ("ab", "ac", "bc")]
+    pi = size_prior(ex)
+    assert np.isclose(pi.sum(), 1.0) and np.isclose(pi[0], 1 / 3) and np.allclose(pi[1:], 1 / 9)
+    assert np.allclose(posterior(ex, 100), pi)
+    ex10 = [Explanation((), 0.0, 0)] + [Explanation((str(i),), 0.0, 0) for i in range(10)] + \
+           [Explanation((str(i), str(j)), 0.0, 0) for i in range(10) for j in range(i + 1, 10)]
+    p = posterior(ex10, 100)
+    assert np.isclose(p[11:].sum(), 1 / 3)     # 45 pairs: a third, not 45/56 of the mass

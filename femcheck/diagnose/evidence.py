@@ -8,8 +8,9 @@ returns
   P(chi^2_dof >= chi^2) for a stated sigma (Gaussian noise; Press et al., Numerical Recipes §15.1), or the
   lack-of-fit F test P(F(dof, nu) >= chi^2 / dof) when sigma was estimated from replicates with nu dof;
 * posterior probabilities over the explanations from the Schwarz (BIC) approximation of the evidence,
-  ``-2 ln p(D | M) ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery 1995 §4.1.3), equal priors:
-  ``P(M_i | D) = exp(-BIC_i / 2) / sum_j exp(-BIC_j / 2)``;
+  ``-2 ln p(D | M) ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery 1995 §4.1.3), with a prior that gives
+  every explanation size (none, singles, pairs) equal mass, shared equally within the size (Scott & Berger 2010):
+  ``P(M_i | D) = pi_i exp(-BIC_i / 2) / sum_j pi_j exp(-BIC_j / 2)``;
 * the ambiguity between the named explanation and its strongest rival that is neither a sub- nor a
   superset of it: they are called *not separable* when their posterior ratio is below ``ambiguity_ratio`` (default 3, |Delta BIC| < 2.2: "not worth more than a
   bare mention" on Kass & Raftery's scale);
@@ -76,10 +77,20 @@ def bic(chi2: float, n_params: int, n_data: int) -> float:
     return float(chi2 + n_params * np.log(max(n_data, 1)))
 
 
+def size_prior(explanations) -> np.ndarray:
+    """(n,) prior over the rivals: every explanation size (none, singles, pairs, ...) gets the same mass, shared
+    equally within the size (the multiplicity correction of Scott & Berger, Ann. Stat. 38 (2010) 2587). With
+    equal priors per explanation, ten causes would give the 45 pairs 80 % of the prior mass before any data."""
+    sizes = np.array([len(e.ids) for e in explanations])
+    uniq, count = np.unique(sizes, return_counts=True)
+    per = {int(k): 1.0 / (len(uniq) * c) for k, c in zip(uniq, count)}
+    return np.array([per[int(k)] for k in sizes])
+
+
 def posterior(explanations, n_data: int) -> np.ndarray:
-    """(n,) BIC posterior probabilities with equal priors (sum 1); see module docstring."""
+    """(n,) BIC posterior probabilities with the size prior of :func:`size_prior` (sum 1)."""
     b = np.array([bic(e.chi2, e.n_params, n_data) + e.penalty for e in explanations], float)
-    w = np.exp(-0.5 * (b - b.min()))
+    w = np.exp(-0.5 * (b - b.min())) * size_prior(explanations)
     return w / w.sum()
 
 

@@ -158,7 +158,7 @@ class Diagnosis:
         return {"model": self.model_name, "verdict": w.verdict,
                 "causes": [c.as_dict() for c in self.causes],
                 "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
-                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N, equal priors over none, singles and pairs",
+                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N; prior: equal mass per explanation size (none, singles, pairs), shared within the size",
                 "residual": self.residual_json(),
                 "heldout_error_before": self.cv_before.error, "heldout_error_after": self.cv_after.error,
                 "heldout_error_along_load_before": self.cv_before.error_along,
@@ -297,7 +297,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     prob = {tuple(sorted(e.ids)): p for e, p in zip(w.explanations, w.probability)}
     p_lead = prob.get(tuple(sorted(cur_fit.ids)), 0.0)
     # marginal probability of each named cause: the sum over all explanations that contain it
-    marg = {e.id: float(sum(p for ids, p in prob.items() if e.id in ids)) for e in chosen}
+    marg = {e.id: min(1.0, float(sum(p for ids, p in prob.items() if e.id in ids))) for e in chosen}
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
                          params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
                          on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")))

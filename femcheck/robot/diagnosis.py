@@ -158,7 +158,7 @@ class SerialDiagnosis:
         h = self.heldout
         return {"verdict": self.verdict, "causes": list(self.causes), "alternatives": w.alternatives(),
                 "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
-                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N, equal priors over none, singles and pairs",
+                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N; prior: equal mass per explanation size (none, singles, pairs), shared within the size",
                 "residual": self.residual,
                 "heldout_mean_error_mm_before": h["mean_before"], "heldout_mean_error_mm_after": h["mean_after"],
                 "heldout_median_error_mm_before": h["median_before"], "heldout_median_error_mm_after": h["median_after"],
@@ -585,7 +585,7 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         units = [u for g in pl.groups for u in g]
         rows = (tree.independent[units] if pl.spec.unit == "joint" else np.array(units, int)) \
             if pl.spec.unit != "single" else np.array([], int)
-        causes.append({"id": cid, "probability": float(sum(p for ids, p in prob.items() if cid in ids)),
+        causes.append({"id": cid, "probability": min(1.0, float(sum(p for ids, p in prob.items() if cid in ids))),
                        "params": params, "params_ci": ci, "location": place_text(pl, tree), "placement": pl.kind,
                        "joints": [tree.names[r] for r in rows], "physics": pl.spec.physics,
                        "placements_bic_alone": {k: float(v) for k, v in f.tried.items()}})
