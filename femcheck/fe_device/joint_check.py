@@ -72,7 +72,7 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0") -> d
     from femcheck.fe_device import joint_fe as jf
 
     loads = joint_loads(case, point)
-    model = jf.build_joint(case, joint, mesh)
+    model = jf.build_joint(case, joint, mesh, max_load_N=max(loads))
     an = jf.analytical_compliance(case, joint, loads)
     # penetration accepted: 1e-3 of the analytical approach at the preload (the compared quantity)
     tol = 1e-3 * float(an[2, 2]) * min(loads)
