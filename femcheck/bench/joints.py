@@ -40,6 +40,9 @@ def run(joints=("spherical", "universal"), levels=LEVELS) -> dict:
             out[f"{key}_iterations"] = r["iterations"]
             out[f"{key}_factorizations"] = r["factorizations"]
             out[f"{key}_augmentations"] = r["augmentations"]
+            out[f"{key}_line_search_cuts"] = r["line_search_cuts"]
+            out[f"{key}_stabilization_force_share"] = r["stabilization_force_share"]
+            out[f"{key}_residual_rel"] = r["residual_rel"]
             out[f"{key}_wall_s"] = round(r["seconds"], 3)
             out[f"{key}_load_preload_N"] = round(r["loads_N"][0], 4)
             out[f"{key}_load_test_N"] = round(r["loads_N"][1], 4)
