@@ -208,3 +208,14 @@ def test_universal_joint_contact_fe_converges_coarse(case, tmp_path):
     # the link pushes the cross across the 2c clearance before the pins bear: the axial displacement at
     # the preload exceeds 2c (the secant excludes it)
     assert r["closed_points"] > 0
+
+
+def test_joint_table_section_for_the_verify_report():
+    """The joint table as a verify-report Section: one row per (joint, component), flagged laws named."""
+    an = np.diag([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    res = {"joint": "universal", "fe_component_compliance": [1.0, 1.0, 1.3, 1.0, 1.0, None],
+           "analytical_compliance": jc._json_matrix(an)}
+    sec = jc.joint_table_section(jc.joint_table_rows([res]))
+    assert len(sec.rows) == 4 and "conformal" in sec.note
+    from femcheck.verify.render import render_markdown
+    assert "Joint table" in render_markdown("t", "", [sec])
