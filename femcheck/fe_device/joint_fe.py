@@ -238,10 +238,6 @@ def _hertz_candidates(case, pair, F_max: float) -> np.ndarray:
     return pair.g0 <= HERTZ_BAND * d + 2.0 * chord
 
 
-#: columns per block of the multi-right-hand-side back-substitution (bounds memory to n_i x 256 x 8 B)
-BLOCK = 256
-
-
 def _prune(B) -> sp.csr_matrix:
     """Drop the round-off entries of a contact operator: P2 shape functions of the nodes off a facet
     vanish on it, so only the facet's 6 nodes (per side) carry weight (fewer retained DOFs)."""
@@ -252,11 +248,13 @@ def _prune(B) -> sp.csr_matrix:
 
 
 def _condense(K, C, pairs, cand, ref_b):
-    """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc), blockwise."""
+    """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc;
+    :func:`femcheck.fe.schur_complement.schur_complement`: PARDISO's own, else blockwise per body)."""
     from scipy.sparse.csgraph import connected_components
 
     from femcheck.fe.constraints import pad
     from femcheck.fe.linear_solver import factorize
+    from femcheck.fe.schur_complement import schur_complement
 
     T = C.T
     K = pad(sp.csr_matrix(K), C.ndof)
@@ -278,24 +276,14 @@ def _condense(K, C, pairs, cand, ref_b):
     r, i = np.flatnonzero(mask), np.flatnonzero(~mask)
     Kii = sp.csr_matrix(Kq[i][:, i])
     Kir = sp.csr_matrix(Kq[i][:, r])
-    S = Kq[r][:, r].toarray()
-    # the bodies are coupled only through the contact DOFs (retained) and the rigid couplings of their
-    # own reference nodes, so K_ii is block diagonal per body: factorize each block and back-substitute
-    # only the retained columns that touch it (≈ 3x less work than one factorization of all of K_ii)
+    S = schur_complement(Kq, r)
+    # K_ii is block diagonal per body (the bodies meet only at retained contact DOFs): one factorization
+    # per body, for the recovery of the interior after the contact solve
     ncomp, label = connected_components(Kii, directed=False)
     blocks = []
     for c in range(ncomp):
         ic = np.flatnonzero(label == c)
-        Kir_c = sp.csc_matrix(Kir[ic])
-        cols = np.flatnonzero(np.diff(Kir_c.indptr))
-        fac = factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")
-        blocks.append((ic, fac))
-        Kc = sp.csc_matrix(Kir_c[:, cols])
-        Krc = sp.csr_matrix(Kc.T)
-        for j in range(0, cols.size, BLOCK):
-            X = fac.solve(Kc[:, j:j + BLOCK].toarray())
-            S[np.ix_(cols, cols[j:j + BLOCK])] -= Krc @ X
-    S = 0.5 * (S + S.T)
+        blocks.append((ic, factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")))
     pos = np.full(n, -1)
     pos[r] = np.arange(r.size)
     red = [dataclasses.replace(p, B_n=sp.csr_matrix(bn[:, r]), B_t=sp.csr_matrix(bt[:, r]),
@@ -316,7 +304,7 @@ def _condense(K, C, pairs, cand, ref_b):
         q[i] = qi
         return [p.g0 + b @ q for p, b in zip(pairs, Bn_all)]
 
-    return S, red, pos[ref_q], int(n), int(r.size), len(blocks), recover
+    return S, red, pos[ref_q], int(n), int(r.size), len(blocks) + 1, recover
 
 
 @dataclasses.dataclass(frozen=True)
