@@ -115,8 +115,11 @@ def joint_table_rows(results: list[dict]) -> list[dict]:
 
 
 def _better_law(joint: str, component: str) -> str:
-    if joint == "universal" and component in ("axial", "lateral"):
+    if joint == "universal" and component == "axial":
         return "conformal pin-in-bore contact (Persson) with yoke bulk, instead of Hertz line contact"
+    if joint == "universal" and component == "lateral":
+        return ("stick friction at the loaded line in series with cross and yoke-arm bending (the bore side is "
+                "open by the clearance), instead of Hertz line contact")
     if joint == "spherical" and component == "axial":
         return "Hertz plus seat-bulk term (finite seat thickness)"
     return "FE-measured compliance (the closed-form stick law is not resolved by the analytical model)"
