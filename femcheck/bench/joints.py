@@ -2,8 +2,8 @@
 
 Per joint and mesh level: DOFs (P2 mesh), free DOFs after constraints, retained DOFs after condensation
 (contact candidates + reference node), candidate / total contact points, condensation time (mesh,
-assembly, pairing, one sparse factorization of the interior, blockwise Schur complement), contact
-iterations, factorizations (interior + the contact loop's), Uzawa updates, total wall time, the eq. 1
+assembly, pairing, PARDISO Schur complement, one factorization per body for the recovery), contact
+iterations, factorizations (Schur + bodies + the contact loop's), Uzawa updates, total wall time, the eq. 1
 axial secant and each component compliance (m/N, rad/(N m)), its error against the closed-form law (%),
 and the spread of each component over the levels run (%, target ≤ 3; universal: coarse and default only).
 Targets (issue 14): universal ≤ 120 s and spherical ≤ 60 s at the default mesh on the 2-core machine.
