@@ -3,7 +3,8 @@
 Each joint is meshed with P2 tetrahedra (``geometry.spherical_joint``: ball in a flat or socket seat;
 ``geometry.universal_joint``: cross pins in yoke bores, with the case's clearance and pin position),
 materials per body from the case, GPTS penalty contact with Coulomb friction, augmented Lagrangian and
-modified Newton–Raphson (:func:`femcheck.fe.newton.solve_contact`, seed 004 §3.3).
+Newton–Raphson with factorization reuse on the condensed system
+(:func:`femcheck.fe.contact.condensed_solver.solve_condensed_contact`, seed 004 §3.3).
 
 Reference nodes. Body a is held (spherical: the seat bottom on the slider; universal: the top faces of
 the platform-yoke arms); body b is tied by a rigid coupling (RBE2) to the reference node b
@@ -18,10 +19,13 @@ direct, :func:`femcheck.fe.linear_solver.factorize`) and the Schur complement
 
     S = K_rr − K_ri K_ii⁻¹ K_ir                               (exact for the linear bodies)
 
-is formed with one multi-right-hand-side back-substitution. The contact iterations (status changes,
-Uzawa updates, refactorizations) then run on the small dense S only. The initial active set is the one
-the Hertz patch predicts: every contact point whose initial gap is within ``closure`` (the clearance
-plus the Hertz approach at the largest load) starts closed; the load is stepped (the eq. 1 levels).
+is formed with multi-right-hand-side back-substitutions, one factorization per body (K_ii is block
+diagonal: the bodies meet only at retained contact DOFs). The contact iterations (status changes,
+Uzawa updates, refactorizations) then run on the small dense S only, as Newton on the convex contact
+energy with an exact line search (no active-set chattering; a cross floating in its 2c clearance is
+seated in one step). The initial active set is the one the Hertz patch predicts: every candidate point
+whose initial gap is within ``closure`` (twice the clearance plus a margin) starts closed; the load is
+stepped (the eq. 1 levels).
 
 Compliances (SI: m/N, rad/(N m), m/(N m)):
 * secant along the joint axis for the eq. 1 increment: (u(F_20) − u(F_5)) / (F_20 − F_5);
@@ -98,8 +102,12 @@ def _mesh_size(case, joint: str, mesh: str) -> float:
 
 
 def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float = 100.0,
-                friction: float | None = None) -> CondensedJoint:
-    """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ."""
+                friction: float | None = None, max_load_N: float | None = None) -> CondensedJoint:
+    """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ.
+
+    ``max_load_N``: the largest load the joint will carry; the ball-in-seat candidates are then the
+    points of the Hertz patch and a margin (:func:`_hertz_candidates`) instead of the whole meshed contact
+    region (4x fewer retained DOFs at the default mesh); ``None`` keeps every point."""
     from femcheck.fe import constraints as cs
     from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
@@ -152,6 +160,8 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
     # the cross lifts and the platform bore (a1) closes on its opposite line (across 2c)
     lines = ("opposite", "first") if joint == "universal" else ("both",)
     cand = [_candidates(p, clearance, ln) for p, ln in zip(pairs, lines)]
+    if joint == "spherical" and max_load_N is not None:
+        cand = [c & _hertz_candidates(case, p, max_load_N) for c, p in zip(cand, pairs)]
     S, red_pairs, ref_r, nfree, nret, nfac, recover = _condense(K, C, pairs, cand, ref_b)
     return CondensedJoint(joint, S, tuple(red_pairs), ref_r, int(basis.N), nfree, nret, time.perf_counter() - t0,
                           clearance, h_c, nfac, int(sum(c.sum() for c in cand)), int(sum(p.n_points for p in pairs)),
@@ -188,20 +198,44 @@ def _candidates(pair, clearance: float, lines: str = "both") -> np.ndarray:
     bore with clearance c: the gap is c (1 − cos θ) from the line of first contact (θ = 0) and 2c − that
     on the opposite line, the one a load reversal closes; the Hertz half-width of the conformal line
     contact at 20 N is a few degrees, so points within ``CANDIDATE_ANGLE_RAD`` (20°) of either line are
-    kept. ``lines`` ('first' | 'opposite' | 'both') selects the line(s) the load direction closes (the
+    kept, the angle taken between the master normal and the first-contact normal (the gaps carry the
+    facet-chord error; without normals, the band falls back to the gaps). ``lines`` ('first' | 'opposite' | 'both') selects the line(s) the load direction closes (the
     universal joint pushed along +z closes the link bore on its first-contact line and the platform bore
     on its opposite line, across 2c). The kept set is verified after the solve: every dropped point must
     still be open.
     """
     if clearance <= 0:
         return np.ones(pair.n_points, bool)
+    normal = getattr(pair, "normal", None)
+    if normal is not None:
+        # by angle: the gaps carry the facet-chord error (≈ 1.4 µm at the coarse mesh, above the 0.6 µm
+        # that 20° means for c = 10 µm), so a band on g0 drops contact points; the master normals do not
+        near = pair.g0 <= pair.g0.min() + 0.1 * clearance
+        n0 = normal[near].mean(axis=0)
+        cos = normal @ (n0 / np.linalg.norm(n0))
+        first, opposite = cos >= math.cos(CANDIDATE_ANGLE_RAD), cos <= -math.cos(CANDIDATE_ANGLE_RAD)
+        return {"first": first, "opposite": opposite, "both": first | opposite}[lines]
     band = clearance * (1.0 - math.cos(CANDIDATE_ANGLE_RAD))
     first, opposite = pair.g0 <= band, pair.g0 >= 2.0 * clearance - band
     return {"first": first, "opposite": opposite, "both": first | opposite}[lines]
 
 
-#: columns per block of the multi-right-hand-side back-substitution (bounds memory to n_i x 256 x 8 B)
-BLOCK = 256
+#: ball in seat: candidate points have an initial gap below this many Hertz approaches at the largest
+#: load (the gap grows as r² / (2 R*) and the patch edge a has g0 = δ_H / 2, so 2 δ_H keeps r ≤ 2 a;
+#: default mesh: 309 of the 624 points of the meshed contact region, which reaches 2.7 a)
+HERTZ_BAND = 2.0
+
+
+def _hertz_candidates(case, pair, F_max: float) -> np.ndarray:
+    """Ball-in-seat points within the Hertz band (``HERTZ_BAND``) of the largest load, plus the facet-chord
+    error of the contact mesh (the gaps carry it). Verified after the solve: every dropped point stays open."""
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.loads import hertz_approach
+
+    fr = joint_friction(case)
+    d = float(hertz_approach(F_max, fr.E_star_Pa, fr.R_star_m))
+    chord = max(-float(pair.g0.min()), 0.0)
+    return pair.g0 <= HERTZ_BAND * d + 2.0 * chord
 
 
 def _prune(B) -> sp.csr_matrix:
@@ -214,9 +248,13 @@ def _prune(B) -> sp.csr_matrix:
 
 
 def _condense(K, C, pairs, cand, ref_b):
-    """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc), blockwise."""
+    """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc;
+    :func:`femcheck.fe.schur_complement.schur_complement`: PARDISO's own, else blockwise per body)."""
+    from scipy.sparse.csgraph import connected_components
+
     from femcheck.fe.constraints import pad
     from femcheck.fe.linear_solver import factorize
+    from femcheck.fe.schur_complement import schur_complement
 
     T = C.T
     K = pad(sp.csr_matrix(K), C.ndof)
@@ -236,15 +274,16 @@ def _condense(K, C, pairs, cand, ref_b):
     mask = np.zeros(n, bool)
     mask[touched] = True
     r, i = np.flatnonzero(mask), np.flatnonzero(~mask)
-    Kii = sp.csc_matrix(Kq[i][:, i])
-    Kir = sp.csc_matrix(Kq[i][:, r])
-    fac = factorize(Kii, "auto")
-    S = Kq[r][:, r].toarray()
-    Kri = sp.csr_matrix(Kir.T)
-    for j in range(0, r.size, BLOCK):
-        X = fac.solve(Kir[:, j:j + BLOCK].toarray())
-        S[:, j:j + BLOCK] -= Kri @ X
-    S = 0.5 * (S + S.T)
+    Kii = sp.csr_matrix(Kq[i][:, i])
+    Kir = sp.csr_matrix(Kq[i][:, r])
+    S = schur_complement(Kq, r)
+    # K_ii is block diagonal per body (the bodies meet only at retained contact DOFs): one factorization
+    # per body, for the recovery of the interior after the contact solve
+    ncomp, label = connected_components(Kii, directed=False)
+    blocks = []
+    for c in range(ncomp):
+        ic = np.flatnonzero(label == c)
+        blocks.append((ic, factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")))
     pos = np.full(n, -1)
     pos[r] = np.arange(r.size)
     red = [dataclasses.replace(p, B_n=sp.csr_matrix(bn[:, r]), B_t=sp.csr_matrix(bt[:, r]),
@@ -258,10 +297,14 @@ def _condense(K, C, pairs, cand, ref_b):
         """Gaps (m) of all contact points of every pair for a condensed displacement u_r (n_r,)."""
         q = np.zeros(n)
         q[r] = u_r
-        q[i] = -fac.solve(Kir @ u_r)
+        y = Kir @ u_r
+        qi = np.zeros(i.size)
+        for ic, fac in blocks:
+            qi[ic] = -fac.solve(y[ic])
+        q[i] = qi
         return [p.g0 + b @ q for p, b in zip(pairs, Bn_all)]
 
-    return S, red, pos[ref_q], int(n), int(r.size), 1, recover
+    return S, red, pos[ref_q], int(n), int(r.size), len(blocks) + 1, recover
 
 
 @dataclasses.dataclass(frozen=True)
@@ -271,8 +314,10 @@ class JointResponse:
     ``loads_N`` the force levels along the joint axis (eq. 1: preload, test); ``axial_m`` (n,) node-b
     displacement along the load; ``secant_axial_m_per_N``; ``tangent`` (6, 6) stick compliance at the test
     load; ``closed_points`` contact points closed at the test load; ``iterations``, ``factorizations``,
-    ``augmentations`` of the contact solve; ``residual_history``; ``dofs``, ``free_dofs``, ``retained``;
-    ``seconds`` (total), ``condense_s``.
+    ``augmentations`` of the contact solve; ``dofs``, ``free_dofs``, ``retained``; ``seconds`` (total),
+    ``condense_s``; ``line_search_cuts`` (iterations with a step < 1), ``stabilized_iterations`` and
+    ``stabilization_force_share`` (the iteration-matrix spring, :mod:`femcheck.fe.contact.condensed_solver`),
+    ``residual_rel`` final ‖r‖ / F_20.
     """
 
     joint: str
@@ -290,6 +335,10 @@ class JointResponse:
     retained: int
     seconds: float
     condense_s: float
+    line_search_cuts: int = 0
+    stabilized_iterations: int = 0
+    stabilization_force_share: float = 0.0
+    residual_rel: float = 0.0
 
     @property
     def fe_compliance(self) -> np.ndarray:
@@ -310,13 +359,12 @@ class JointResponse:
 
 
 def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
-                penetration_tol: float) -> JointResponse:
+                penetration_tol: float, max_iter: int = 100) -> JointResponse:
     """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
 
     ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
     approach at the smallest load, e.g. 1e-3 of the analytical one)."""
-    from femcheck.fe.contact import status as st
-    from femcheck.fe.newton import ContactProblem, solve_contact
+    from femcheck.fe.contact.condensed_solver import solve_condensed_contact
 
     t0 = time.perf_counter()
     loads = tuple(float(F) for F in loads_N)
@@ -329,33 +377,52 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
     ax = int(np.searchsorted(keep, model.ref[2]))
     f = np.zeros(keep.size)
     f[ax] = axis_sign * Fmax
-    pairs = tuple(dataclasses.replace(p, B_n=sp.csr_matrix(p.B_n[:, keep]), B_t=sp.csr_matrix(p.B_t[:, keep]),
-                                      friction=0.0) for p in model.pairs)
-    problem = ContactProblem(K=sp.csr_matrix(model.S[np.ix_(keep, keep)]), f=f, pairs=pairs)
-    # Hertz-predicted active set: every point within the clearance (plus a tiny margin) starts closed
+    B = sp.vstack([p.B_n[:, keep] for p in model.pairs], format="csr")
+    g0 = np.concatenate([p.g0 for p in model.pairs])
+    eps = np.concatenate([p.penalty_n for p in model.pairs])
+    w = np.concatenate([p.weights for p in model.pairs])
+    sizes = np.cumsum([0] + [p.n_points for p in model.pairs])
+
+    def point_info(idx):
+        out = []
+        for k in np.asarray(idx)[:50]:
+            j = int(np.searchsorted(sizes, k, side="right") - 1)
+            pr = model.pairs[j]
+            out.append({"pair": pr.name, "point": int(k - sizes[j]), "x_m": pr.points[k - sizes[j]].tolist()})
+        return out
+
+    # Hertz-predicted active set: every candidate point within the clearance (plus a tiny margin) starts
+    # closed (the candidates are the loaded lines only, :func:`_candidates`)
     closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m
-    res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=closure,
-                        penetration_tol=penetration_tol, max_iter=150)
-    u = np.array([axis_sign * s.u[ax] for s in res.steps])
+    res = solve_condensed_contact(model.S[np.ix_(keep, keep)], f, B, g0, eps, w, [F / Fmax for F in loads],
+                                  initial_closed=g0 <= closure, penetration_tol=penetration_tol, max_iter=max_iter,
+                                  point_info=point_info)
+    u = axis_sign * res.u[:, ax]
     sec = float((u[-1] - u[0]) / (loads[-1] - loads[0]))
-    closed = [ps.status != st.OPEN for ps in res.steps[-1].pairs]
+    closed = [res.closed[-1][sizes[j]:sizes[j + 1]] for j in range(len(model.pairs))]
     if model.recover is not None and model.candidate_points < model.contact_points:
         u_full = np.zeros(n)
-        u_full[keep] = res.steps[-1].u
+        u_full[keep] = res.u[-1]
         gaps = model.recover(u_full)
         # a dropped point violates the candidate band when it penetrates more than it did at the start
         # (initial facet-chord noise, accepted by the geometry check, is not a contact the band missed)
-        pen = max(float(np.max(-g - np.maximum(-p0.g0, 0.0))) for g, p0 in zip(gaps, model.full_pairs))
-        log.info("%s: largest penetration growth over all contact points %.3g m", model.joint, pen)
+        growth = [-g - np.maximum(-p0.g0, 0.0) for g, p0 in zip(gaps, model.full_pairs)]
+        j = int(np.argmax([float(x.max()) for x in growth]))
+        k = int(np.argmax(growth[j]))
+        pen = float(growth[j][k])
+        pw = model.full_pairs[j]
+        where = {"pair": pw.name, "point": k, "x_m": pw.points[k].tolist(), "g0_m": float(pw.g0[k])}
+        log.info("%s: largest penetration growth over all contact points %.3g m at %s", model.joint, pen, where)
         if pen > 10.0 * penetration_tol:
             raise ConvergenceError(f"{model.joint} joint: a contact point outside the Hertz-predicted candidate band "
-                                   f"penetrates by {pen:.3g} m; widen CANDIDATE_ANGLE_RAD", [], {"penetration_m": pen})
+                                   f"penetrates by {pen:.3g} m ({where}); widen CANDIDATE_ANGLE_RAD",
+                                   list(res.residual_history), {"penetration_m": pen, "point": where})
     tangent, stiffness = _tangent(model, closed)
     return JointResponse(model.joint, loads, u, sec, tangent, stiffness, int(sum(int(c.sum()) for c in closed)),
-                         int(sum(res.iterations_per_step)),
-                         int(res.timings.get("factorizations", 0)), int(sum(s.augmentations for s in res.steps)),
+                         res.iterations, res.factorizations, res.augmentations,
                          model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
-                         model.condense_s)
+                         model.condense_s, res.line_search_cuts, res.stabilized_iterations,
+                         res.stabilization_force_share, float(res.residual_history[-1]) / Fmax)
 
 
 def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
@@ -381,6 +448,8 @@ def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
     except np.linalg.LinAlgError:
         X = np.linalg.lstsq(Aoo, Aor, rcond=None)[0]
     Kb = A[np.ix_(ref, ref)] - Aor.T @ X
+    log.info("%s: 6 x 6 tangent stiffness asymmetry before symmetrising %.3g (Maxwell-Betti, round-off)",
+             model.joint, float(np.abs(Kb - Kb.T).max() / np.abs(Kb).max()))
     Kb = 0.5 * (Kb + Kb.T)
     w, V = np.linalg.eigh(Kb)
     tol = 1e-9 * max(float(w.max()), 1e-300)

@@ -197,6 +197,15 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         tilt = ball_tilt_study(case, progress)
         friction = joint_friction(case, tilt_slip_ratio=tilt_slip_ratio(tilt))
         t_tilt = time.perf_counter() - tc
+    joint_results, t_joints = [], 0.0
+    if levels and joint_fe and "detailed" in levels:
+        # the joint table (issue 14 part 3): contact FE of each passive joint at the coarse joint mesh
+        # (≈ 25 s, docs/joint_fe.md) vs its closed-form law
+        from femcheck.fe_device.joint_check import check_joint
+        from femcheck.fe_device.joint_fe import JOINTS as JOINT_TYPES
+        tc = time.perf_counter()
+        joint_results = [check_joint(case, j, "coarse", "P0") for j in JOINT_TYPES]
+        t_joints = time.perf_counter() - tc
     if levels:
         from femcheck.verify.fe import run_fe
         fe = run_fe(case, pts, tuple(levels), mesh, jobs, kind=fe_kind, progress=progress, friction=friction)
@@ -236,6 +245,13 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     if fe is not None:
         fe_tabs, fe_times = _fe_sections(case, av, fe, pts, put, sections, out, vtu, pngs, tilt)
         fe_times["ball_tilt_contact_fe"] = round(t_tilt, 2)
+        if joint_results:
+            from femcheck.fe_device.joint_check import joint_table_rows, joint_table_section, write_joint_table_csv
+            jrows = joint_table_rows(joint_results)
+            put("joint_table.csv", write_joint_table_csv(jrows))
+            put("joint_fe.json", json.dumps(joint_results, indent=2) + "\n")
+            sections.append(joint_table_section(jrows))
+            fe_times["joint_contact_fe"] = round(t_joints, 2)
         if has_contact_joints(fe) and len(fe.points) == 9:
             from femcheck.verify.contact_diagnosis import diagnose_contact_fe
             tc = time.perf_counter()
