@@ -24,7 +24,7 @@ SINGULAR_POSE = "0.02005724,-0.03464544,0.36387856,-0.40609716,0.63678694,-0.594
 def inputs(tmp_path_factory):
     """Copies of the user's inputs (case files, a measured CSV, a PNG, a plain file) in one folder."""
     d = tmp_path_factory.mktemp("inputs")
-    for name in ("haptic_6psu.toml", "irb120.toml", "hiss.toml"):
+    for name in ("haptic_6psu.toml", "irb120.toml", "hiss.toml", "humanoid_tree.toml"):
         shutil.copy(ROOT / "cases" / name, d / name)
     shutil.copy(ROOT / "docs" / "images" / "spherical_joint.png", d / "picture.png")
     (d / "a_file").write_text("not a folder\n")
@@ -36,6 +36,11 @@ def inputs(tmp_path_factory):
     lines = (d / "measured.csv").read_text().splitlines()
     header = [ln for ln in lines if not ln.startswith("#")][0]
     (d / "no_column.csv").write_text("\n".join([header.replace(",dz_mm", "")] + [ln.rsplit(",", 1)[0] for ln in lines[4:]]))
+    assert main(["experiment", "simulate", str(d / "humanoid_tree.toml"), "--out", str(d / "positions.csv"),
+                 "--truth", str(d / "positions_truth.json"), "--poses", "12"]) == 0
+    (d / "robot.urdf").write_text("<robot name='r'><link name='a'/><link name='b'><inertial><mass value='1'/></inertial>"
+                                  "</link><joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+                                  "<axis xyz='0 0 1'/></joint></robot>")
     (d / "user_folder").mkdir()
     (d / "user_folder" / "notes.txt").write_text("mine\n")
     return d
@@ -88,6 +93,24 @@ CASES = [
      "--max-condition", None),
     ("plan_missing_column", ["plan", "{d}/haptic_6psu.toml", "{d}/no_column.csv"], 2, "dz_mm", None),
     ("unknown_linear_solver", ["--linear-solver", "bogus", "stiffness", "{d}/haptic_6psu.toml"], 2, "bogus", None),
+    ("serial_diagnose_negative_sigma", ["diagnose", "{d}/humanoid_tree.toml", "{d}/positions.csv", "--sigma-mm", "-1",
+                                        "--json", "{d}/s0.json"], 2, "--sigma-mm", "{d}/s0.json"),
+    ("serial_diagnose_one_fold", ["diagnose", "{d}/humanoid_tree.toml", "{d}/positions.csv", "--folds", "1"], 2,
+     "--folds", None),
+    ("serial_diagnose_dial_csv", ["diagnose", "{d}/humanoid_tree.toml", "{d}/measured.csv"], 2, "dial-readings CSV", None),
+    ("serial_simulate_unknown_cause", ["experiment", "simulate", "{d}/humanoid_tree.toml", "--effect", "bogus:r2=1e-4",
+                                       "--out", "{d}/s1.csv", "--truth", "{d}/s1.json"], 2, "bogus", "{d}/s1.csv"),
+    ("serial_simulate_unknown_joint", ["experiment", "simulate", "{d}/humanoid_tree.toml", "--effect",
+                                       "joint_torsion_compliance:r99=1e-4", "--out", "{d}/s2.csv", "--truth", "{d}/s2.json"],
+     2, "r99", "{d}/s2.csv"),
+    ("serial_simulate_unknown_foreign", ["experiment", "simulate", "{d}/humanoid_tree.toml", "--foreign", "wobble=1",
+                                         "--out", "{d}/s3.csv", "--truth", "{d}/s3.json"], 2, "wobble", "{d}/s3.csv"),
+    ("import_urdf_bad_marker", ["import-urdf", "{d}/robot.urdf", "--marker", "tip=b@1,2", "--out", "{d}/r.toml"], 2,
+     "--marker", "{d}/r.toml"),
+    ("import_urdf_marker_on_base", ["import-urdf", "{d}/robot.urdf", "--marker", "tip=a", "--out", "{d}/r.toml"], 2,
+     "fixed to the base", "{d}/r.toml"),
+    ("import_urdf_not_xml", ["import-urdf", "{d}/a_file", "--marker", "tip=b", "--out", "{d}/r.toml"], 2,
+     "not a readable URDF", "{d}/r.toml"),
 ]
 
 

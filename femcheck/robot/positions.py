@@ -61,6 +61,10 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
     header = [h.strip() for h in next(reader)]
     qcols = [f"q{i + 1}_rad" for i in range(n_joints)]
     need = ["pose", "marker", *qcols, "x_mm", "y_mm", "z_mm"]
+    if "pose" not in header and "point" in header:
+        raise MeasuredDataError(source, first + 1, "pose", "required column is missing: this is a dial-readings CSV "
+                                "(point, direction, ...); a serial robot takes marker positions: pose, marker, q1_rad.., "
+                                "x_mm, y_mm, z_mm")
     for c in need:
         if c not in header:
             extra = [h for h in header if h.startswith("q") and h.endswith("_rad")]
