@@ -36,16 +36,19 @@ def parse_vector(text: str, n: int, name: str) -> np.ndarray:
     return np.asarray(values)
 
 
-def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, str]:
-    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0."""
+def select_pose(case, point: str | None, pose: str | None, points=None, labels=POINT_LABELS) -> tuple[np.ndarray, str]:
+    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0. ``points`` (k, 6) and
+    ``labels`` (k,): the case's test points when they are not the 6-PSU's (e.g. a parallel_device case)."""
     if point and pose:
         raise typer.BadParameter("give either --point or --pose, not both")
     if pose:
         return parse_vector(pose, 6, "--pose")[None, :], f"[{pose}]"
     label = (point or "P0").upper()
-    if label not in POINT_LABELS:
-        raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(POINT_LABELS)}")
-    return test_points(case)[point_index([label])], label
+    if label not in labels:
+        raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(labels)}")
+    if points is None:
+        return test_points(case)[point_index([label])], label
+    return np.asarray(points)[[list(labels).index(label)]], label
 
 
 def direction_vector(direction: str) -> np.ndarray:

@@ -8,21 +8,15 @@ from rich.table import Table
 
 from femcheck.cli import console
 from femcheck.cli._common import emit_json, parse_vector
+from femcheck.cli._common import select_pose as _select_pose
 from femcheck.parallel.chain_model import evaluate
 from femcheck.parallel.device import POINT_LABELS, test_points
 from femcheck.parallel.leg_kinematics import actuation_jacobian, solve_legs
 
 
 def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, str]:
-    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0."""
-    if point and pose:
-        raise typer.BadParameter("give either --point or --pose, not both")
-    if pose:
-        return parse_vector(pose, 6, "--pose")[None, :], f"[{pose}]"
-    label = (point or "P0").upper()
-    if label not in POINT_LABELS:
-        raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(POINT_LABELS)}")
-    return test_points(case)[[POINT_LABELS.index(label)]], label
+    """The (1, 6) pose from --point or --pose over the device's own test points."""
+    return _select_pose(case, point, pose, points=test_points(case), labels=POINT_LABELS)
 
 
 def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, wrench, json_out) -> None:
