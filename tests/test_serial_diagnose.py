@@ -178,3 +178,26 @@ def test_occluded_markers_are_left_out_and_counted():
     lines[5] = ",".join(lines[5].split(",")[:-4] + ["nan", "1.0", "2.0", "0"])
     back = parse_marker_csv("\n".join(lines), "d.csv", case.tree.marker_names, case.tree.n_joints)
     assert back.missing == 2 and back.n_readings == data.n_readings - 2
+
+
+def test_a_file_with_every_rows_angle_is_read_at_the_independent_columns():
+    """A tree with a coupled row: the CSV may give q1..q_rows (every row) instead of the independent joints only;
+    the independent columns are read and the coupled row's column is ignored (the coupling gives it)."""
+    from femcheck.case.registry import build_case
+    from femcheck.robot.positions import parse_marker_csv
+    _, raw = industrial_case(0)
+    raw["joints"][4]["coupling"] = {"j4": -1.0}
+    case = build_case(raw, "<coupled>")
+    tree = case.tree
+    data, _ = simulate_positions(case, 10, seed=1)
+    text = format_marker_csv(data, tree.marker_names)
+    # widen to every row: insert the coupled row's angle as q5 and shift q5 -> q6
+    lines = text.splitlines()
+    head = lines[0].replace("q5_rad", "q6_rad").replace("q4_rad,", "q4_rad,q5_rad,")
+    body = []
+    for ln in lines[1:]:
+        f = ln.split(",")
+        q4 = float(f[5])
+        body.append(",".join(f[:6] + [f"{-q4:.9f}"] + f[6:]))
+    back = parse_marker_csv("\n".join([head] + body), "d.csv", tree.marker_names, tree.n_joints, tree.independent)
+    assert np.allclose(back.q, data.q) and np.allclose(back.xyz, data.xyz)

@@ -52,7 +52,10 @@ class MarkerPositions:
                                new[self.pose[keep]], self.marker[keep], self.xyz[keep], 0)
 
 
-def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> MarkerPositions:
+def parse_marker_csv(text: str, source: str, marker_names, n_joints: int, independent_rows=None) -> MarkerPositions:
+    """Parse the CSV text. ``independent_rows`` (n_joints,): the row indices of the independent joints when the
+    tree has coupled rows; a file that gives every row's angle (q1..q_rows) is then read at those columns, and
+    the coupled rows' angles are not used (the coupling gives them)."""
     lines = text.splitlines()
     first = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
     if first is None:
@@ -60,6 +63,12 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
     reader = csv.reader(io.StringIO("\n".join(lines[first:])))
     header = [h.strip() for h in next(reader)]
     qcols = [f"q{i + 1}_rad" for i in range(n_joints)]
+    given = [h for h in header if h.startswith("q") and h.endswith("_rad")]
+    extra_q = []
+    if independent_rows is not None and len(given) > n_joints and \
+            set(given) == {f"q{i + 1}_rad" for i in range(len(given))} and len(given) > max(independent_rows):
+        extra_q = [c for c in given if c not in {f"q{r + 1}_rad" for r in independent_rows}]
+        qcols = [f"q{r + 1}_rad" for r in independent_rows]
     need = ["pose", "marker", *qcols, "x_mm", "y_mm", "z_mm"]
     if "pose" not in header and "point" in header:
         raise MeasuredDataError(source, first + 1, "pose", "required column is missing: this is a dial-readings CSV "
@@ -70,7 +79,7 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
             extra = [h for h in header if h.startswith("q") and h.endswith("_rad")]
             hint = f" (the case has {n_joints} independent joints; the file has {len(extra)} q columns)" if c in qcols else ""
             raise MeasuredDataError(source, first + 1, c, f"required column is missing{hint}")
-    known = set(need) | {"fold", "payload_kg"}
+    known = set(need) | {"fold", "payload_kg"} | set(extra_q)
     unknown = [h for h in header if h not in known]
     if unknown:
         raise MeasuredDataError(source, first + 1, unknown[0], f"unknown column; expected {need + ['fold', 'payload_kg']}")
@@ -135,11 +144,11 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int) -> Mar
                            np.array(r_xyz) * 1e-3, missing)
 
 
-def read_marker_csv(path, marker_names, n_joints: int) -> MarkerPositions:
+def read_marker_csv(path, marker_names, n_joints: int, independent_rows=None) -> MarkerPositions:
     """Read and validate a marker-position CSV (opened read-only)."""
     from femcheck.measured.csv_format import read_data_text
     text = read_data_text(path)
-    return parse_marker_csv(text, str(path), marker_names, n_joints)
+    return parse_marker_csv(text, str(path), marker_names, n_joints, independent_rows)
 
 
 def format_marker_csv(data: MarkerPositions, marker_names, meta: dict | None = None) -> str:
