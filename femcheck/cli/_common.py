@@ -89,3 +89,23 @@ def emit_json(obj, out: str, inputs=()) -> None:
     check_output_file(out, "--json")
     refuse_input_overwrite(out, inputs)
     write_text_atomic(out, text + "\n")
+
+
+
+def print_directional_stiffness(con, result) -> None:
+    """The stiffness along x, y, z of the first pose of a chain result (1 / compliance along the axis), N/mm."""
+    kd = [float(result.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
+    con.print("directional stiffness (1 / compliance along the axis): "
+              + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+
+
+def print_contributions(con, contrib: dict, title: str) -> None:
+    """The table of element shares of the deflection energy, %."""
+    from rich.table import Table
+
+    ct = Table(title=title)
+    ct.add_column("element")
+    ct.add_column("share %", justify="right")
+    for name, v in contrib.items():
+        ct.add_row(name, f"{100*v:.1f}")
+    con.print(ct)

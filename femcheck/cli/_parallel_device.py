@@ -7,7 +7,7 @@ import typer
 from rich.table import Table
 
 from femcheck.cli import console
-from femcheck.cli._common import emit_json, parse_vector
+from femcheck.cli._common import emit_json, parse_vector, print_contributions, print_directional_stiffness
 from femcheck.cli._common import select_pose as _select_pose
 from femcheck.parallel.chain_model import evaluate
 from femcheck.parallel.device import POINT_LABELS, test_points
@@ -58,17 +58,10 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
     t = r.twist[0]
     con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
               f"theta = [{t[3]*1e3:.5f}, {t[4]*1e3:.5f}, {t[5]*1e3:.5f}] mrad")
-    kd = [float(r.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
-    con.print("directional stiffness (1 / compliance along the axis): "
-              + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+    print_directional_stiffness(con, r)
     con.print(f"{dev.n_legs} legs; actuated joints (from home, m or rad) {np.array2string(np.array(q_act), precision=4)}; "
               f"condition number of the actuation Jacobian's translational part {cond:.3f}")
-    ct = Table(title="contributions (share of deflection energy)")
-    ct.add_column("element")
-    ct.add_column("share %", justify="right")
-    for name, v in contrib.items():
-        ct.add_row(name, f"{100*v:.1f}")
-    con.print(ct)
+    print_contributions(con, contrib, "contributions (share of deflection energy)")
 
 
 #: a parallel device's beam FE uses the analytical element laws, so analytical and FE agree to rounding; a

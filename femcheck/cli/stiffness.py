@@ -10,7 +10,8 @@ from rich.table import Table
 
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.cli import console
-from femcheck.cli._common import JSON_HELP, Joints, ModelLevel, emit_json, load_case_for, parse_vector, select_pose
+from femcheck.cli._common import (JSON_HELP, Joints, ModelLevel, emit_json, load_case_for, parse_vector, print_contributions,
+                                  print_directional_stiffness, select_pose)
 from femcheck.kinematics.conditioning import DEFAULT_MAX_CONDITION, require_well_conditioned
 from femcheck.kinematics.psu6 import condition_number, leg_geometry
 
@@ -67,15 +68,8 @@ def register(app: typer.Typer) -> None:
         t = r.twist[0]
         con.print(f"deflection: d = [{t[0]*1e3:.5f}, {t[1]*1e3:.5f}, {t[2]*1e3:.5f}] mm, "
                   f"theta = [{t[3]*1e3:.5f}, {t[4]*1e3:.5f}, {t[5]*1e3:.5f}] mrad")
-        kd = [float(r.directional_stiffness(np.eye(3)[a])[0]) for a in range(3)]
-        con.print("directional stiffness (1 / compliance along the axis): "
-                  + ", ".join(f"k_{a} = {v/1e3:.2f} N/mm" for a, v in zip("xyz", kd)))
+        print_directional_stiffness(con, r)
         legs = leg_geometry(case, P)
         con.print(f"Jacobian condition number (homogenized, L = R_p): {condition_number(case, legs)[0]:.3f}; "
                   f"slider positions {np.array2string(legs.slider[0]*1e3, precision=1)} mm")
-        ct = Table(title="contributions (share of deflection energy, CONVENTIONS.md §7)")
-        ct.add_column("element")
-        ct.add_column("share %", justify="right")
-        for name, v in contrib.items():
-            ct.add_row(name, f"{100*v:.1f}")
-        con.print(ct)
+        print_contributions(con, contrib, "contributions (share of deflection energy, CONVENTIONS.md §7)")

@@ -62,9 +62,8 @@ class ParallelResult:
 
     def directional_stiffness(self, direction) -> np.ndarray:
         """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m."""
-        d = np.asarray(direction, dtype=float)
-        d = d / np.linalg.norm(d)
-        return 1.0 / np.einsum("i,nij,j->n", d, self.S[:, :3, :3], d)
+        from femcheck.compliance.directional import directional_stiffness
+        return directional_stiffness(self.S, direction)
 
 
 def leg_element_compliances(device, state: DeviceState, model: str = "detailed") -> list[dict[str, np.ndarray]]:
