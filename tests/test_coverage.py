@@ -15,10 +15,15 @@ def fe_models():
     return run_fe(femcheck.load_case("cases/haptic_6psu.toml"), ("P0",), levels=("detailed",), mesh="coarse").models
 
 
+def _law_actuation():
+    """The reference case with the device FE taking eq. 44's spring itself (``[actuation.fe] model = "law"``)."""
+    return femcheck.load_case("cases/haptic_6psu.toml").with_params(**{"actuation.fe.model": "law"})
+
+
 @pytest.fixture(scope="module")
-def coverage(fe_models, case_path="cases/haptic_6psu.toml"):
-    return element_coverage(femcheck.load_case(case_path), points=("P0",), mutation_pct=50.0, mesh="coarse",
-                            fe_models=fe_models)
+def coverage(fe_models):
+    """Closed-form joint laws and the eq. 44 actuation spring on the FE side: three shared laws."""
+    return element_coverage(_law_actuation(), points=("P0",), mutation_pct=50.0, mesh="coarse", fe_models=fe_models)
 
 
 def test_law_scale_multiplies_the_element_compliance_exactly():
@@ -41,7 +46,7 @@ def test_meshed_element_is_detected_and_shared_law_is_not(coverage):
     # the guideways are meshed solids: the FE does not move with the law (ratio 0 to round-off)
     assert by["guideway"].fe_source == "meshed" and by["guideway"].fe_response_ratio < 1e-6
     assert by["guideway"].detected
-    # the actuation spring is the analytical law itself in the device FE today: it moves alike, and goes unseen
+    # with model = "law" the actuation spring is the analytical law itself in the device FE: it moves alike, unseen
     assert by["actuation"].fe_source == "shared_closed_form"
     assert not by["actuation"].detected and by["actuation"].min_detectable_pct is None
     # min detectable mutation by linearization: between 0 and the applied 50 % for a detected element
@@ -59,7 +64,8 @@ def test_coverage_cli_json_keys(tmp_path):
     import json
     from femcheck.cli import main
     out = tmp_path / "cov.json"
-    assert main(["coverage", "cases/haptic_6psu.toml", "--points", "P0", "--mutation", "50", "--json", str(out)]) == 0
+    assert main(["coverage", "cases/haptic_6psu.toml", "--points", "P0", "--mutation", "50", "--no-joint-fe",
+                 "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert {"mutation_pct", "covered_share_pct", "elements"} <= set(doc)
     assert {"element", "share_pct", "fe_source", "error_change_pct", "detected", "min_detectable_pct"} <= set(doc["elements"][0])
@@ -73,8 +79,8 @@ def _actuation_fe(**opts):
 def test_actuation_fe_makes_the_actuation_meshed_and_detected(fe_models, coverage):
     """Issue 22 item 2: with the actuation as elements (eq. 44's single-strand layout, which the elements reproduce
     exactly, so the unmutated pair still passes) a wrong actuation law is caught and counts as covered."""
-    res = element_coverage(_actuation_fe(layout="single_strand"), points=("P0",), mutation_pct=50.0, mesh="coarse",
-                           fe_models=fe_models)
+    res = element_coverage(femcheck.load_case("cases/haptic_6psu.toml"), points=("P0",), mutation_pct=50.0,
+                           mesh="coarse", fe_models=fe_models)   # the reference case: elements, single strand
     by = {e.element: e for e in res.elements}
     assert by["actuation"].fe_source == "meshed" and by["actuation"].fe_response_ratio < 1e-6
     assert by["actuation"].detected and 0 < by["actuation"].min_detectable_pct < 50
@@ -86,7 +92,8 @@ def test_actuation_fe_makes_the_actuation_meshed_and_detected(fe_models, coverag
 def test_closed_loop_actuation_fe_fails_eq44_and_coverage_says_so(fe_models):
     """The case's closed cable loop puts two strands in parallel: the FE is much stiffer than eq. 44's single
     strand, the unmutated check fails (a finding, docs/verify.md), and coverage flags its base as failing."""
-    res = element_coverage(_actuation_fe(), points=("P0",), mutation_pct=50.0, mesh="coarse", fe_models=fe_models)
+    res = element_coverage(_actuation_fe(layout="closed_loop"), points=("P0",), mutation_pct=50.0, mesh="coarse",
+                           fe_models=fe_models)
     assert not res.base_passes and res.base_error_pct > 30.0          # measured 55 % (P0, coarse, +x)
     by = {e.element: e for e in res.elements}
     assert by["actuation"].fe_source == "meshed" and by["actuation"].min_detectable_pct == 0.0

@@ -12,7 +12,10 @@ from femcheck.fe_device.actuation_fe import actuation_springs, leg_actuation
 
 @pytest.fixture(scope="module")
 def ref():
-    return femcheck.load_case("cases/haptic_6psu.toml")
+    """The reference device with the FE actuation options these tests vary set explicitly (the case file itself
+    selects elements in the single-strand layout): eq. 44's spring in the device FE, a closed cable loop."""
+    return femcheck.load_case("cases/haptic_6psu.toml").with_params(
+        **{"actuation.fe.model": "law", "actuation.fe.layout": "closed_loop"})
 
 
 def _eq44(case):
@@ -75,7 +78,7 @@ def test_slider_outside_the_cable_run_is_refused(ref):
 def test_device_fe_uses_the_elements_and_checks_the_strands(ref):
     """With [actuation.fe] model = "elements" the device FE takes its actuation springs from the elements (one
     per leg, from its slider position) and adds the pretension's transverse geometric stiffness to the guideway
-    tip across the rail (frame A x, y); the default keeps eq. 44 and the guideways as they are."""
+    tip across the rail (frame A x, y); model = "law" keeps eq. 44 and the guideways as they are."""
     from types import SimpleNamespace
     from femcheck.fe_device.device_model import actuation_at, point_geometry, point_model
     legs = point_geometry(ref, ("P5",))

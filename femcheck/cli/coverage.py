@@ -18,6 +18,9 @@ def register(app: typer.Typer) -> None:
         mesh: str = typer.Option("coarse", "--mesh", help="FE mesh: coarse | default | fine"),
         json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
         jobs: int = typer.Option(1, "--jobs", min=1, help="worker processes for the FE super-elements"),
+        joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="the FE's passive joints as their contact "
+                                      "FE measures them (cached; first run 1-3 min); off: the closed-form joint laws"),
+        joint_mesh: str = typer.Option("coarse", "--joint-mesh", help="mesh of the joint contact FE: coarse | default | fine"),
         set_: Optional[list[str]] = typer.Option(None, "--set", metavar="KEY=VALUE",
                                                  help="override a case key (TOML value), e.g. actuation.fe.model=elements; repeatable"),
     ):
@@ -32,6 +35,8 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--mutation: {mutation}; expected a percentage in (0, 1000]")
         if mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
+        if joint_mesh not in MESH_LEVELS:
+            raise typer.BadParameter(f"--joint-mesh: {joint_mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
         pts = tuple(p.strip().upper() for p in points.split(",") if p.strip())
         bad = [p for p in pts if p not in POINT_LABELS]
         if bad or not pts:
@@ -43,8 +48,13 @@ def register(app: typer.Typer) -> None:
         if set_:
             case = case.with_params(**parse_overrides(set_))
         con = console()
-        with progress("coverage", 1 + 5, con) as bar:
-            res = element_coverage(case, pts, mutation, mesh, jobs=jobs, progress=lambda d: bar.advance(1, d))
+        with progress("coverage", 1 + 5 + (2 if joint_fe else 0), con) as bar:
+            laws = None
+            if joint_fe:
+                from femcheck.fe_device.joint_laws import measure_joint_laws
+                laws = measure_joint_laws(case, joint_mesh, progress=lambda d: bar.advance(1, d))
+            res = element_coverage(case, pts, mutation, mesh, jobs=jobs, progress=lambda d: bar.advance(1, d),
+                                   joint_laws=laws)
         if json_out:
             emit_json(res.as_json(), json_out, inputs=[case_path])
             if json_out == "-":
@@ -60,7 +70,8 @@ def register(app: typer.Typer) -> None:
                       "-" if e.min_detectable_pct is None else f"{e.min_detectable_pct:.0f}")
         con.print(t)
         con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance can be caught by the FE "
-                  f"(base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s)")
+                  f"(base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s; joint laws on the FE side: "
+                  + ", ".join(f"{j} {s}" for j, s in res.joint_laws.items()) + ")")
         if not res.base_passes:
             con.print(f"[yellow]the unmutated model already fails the check ({res.base_error_pct:.2f} % > "
                       f"{res.threshold_pct:g} %): every mutation is caught trivially[/yellow]")

@@ -34,9 +34,11 @@ def register(app: typer.Typer) -> None:
         convergence: str = typer.Option(None, "--convergence", help="mesh-convergence study (coarse/default/fine) at this point, "
                                         "e.g. P0; default: P0 for a full default-mesh run, else none ('none' to skip)"),
         force: bool = typer.Option(False, "--force", help="empty --out even if it holds files femcheck did not write"),
-        joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="detailed level: run the contact FE of the "
-                                      "ball alone under tilt and use its measured slip moment in the contact joints "
-                                      "(about 1-3 min); off: the theoretical slip moment mu F R"),
+        joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="detailed level: measure both passive "
+                                      "joints by their contact FE (force ladder, cached) and use those laws in the "
+                                      "device FE, run the ball tilt contact FE for the slip moment and the joint table "
+                                      "(first run about 2-4 min); off: the closed-form joint laws on the FE side too"),
+        joint_mesh: str = typer.Option("coarse", "--joint-mesh", help="mesh of the joint contact FE: coarse | default | fine"),
     ):
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
@@ -55,6 +57,8 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
+        if joint_mesh not in MESH_LEVELS:
+            raise typer.BadParameter(f"--joint-mesh: {joint_mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
         case = load_case_for(case_path, "verify", kinds=("haptic_6psu", "parallel_device"))
         if case.kind == "parallel_device":
             from femcheck.cli._parallel_device import verify
@@ -83,14 +87,14 @@ def register(app: typer.Typer) -> None:
         con = console()
         reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")
         n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0) + \
-            (2 if joint_fe and "detailed" in levels else 0)
+            (4 if joint_fe and "detailed" in levels else 0)
         from femcheck.cli import progress
         with progress("FE solves", n_solves, con) if levels else progress("analytical", None, con) as bar:
             run = run_verify(case, out, pts, check=check, baseline_path=baseline if (check or update_baseline) else None,
                              update_baseline=update_baseline, command="femcheck verify " + case_path, levels=levels,
                              mesh=mesh, jobs=jobs, progress=lambda desc: bar.advance(1, desc),
                              fe_baseline_path=fe_base if (check or update_baseline) else None, vtu=vtu,
-                             convergence_point=conv_point, joint_fe=joint_fe)
+                             convergence_point=conv_point, joint_fe=joint_fe, joint_mesh=joint_mesh)
         from rich.table import Table
 
         def show(title, rows):

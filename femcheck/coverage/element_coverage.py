@@ -12,8 +12,10 @@ Per element:
 - ``share_pct``: the element's mean share of the complementary energy (CONVENTIONS.md §7) at the points;
 - ``fe_source``: from behaviour, not a label: ``shared_closed_form`` when the FE deflection moves with the
   mutation like the analytical one (ratio of the relative changes >= 0.5: the FE reuses the law), else
-  ``meshed`` (the FE does not move: its element is an independent model), or ``contact_fe`` for a joint
-  element whose FE response comes from a contact FE of the joint (the joint-FE work; not in this tree yet);
+  ``meshed`` (the FE does not move: its element is an independent model), or ``contact_fe`` when the FE does
+  not move and that element's FE response is the law measured by the joint's contact FE
+  (:mod:`femcheck.fe_device.joint_laws`; behaviour decides independent vs shared, the FE's record of what
+  supplied the element names the kind of independent model);
 - ``error_change_pct``: change of the worst mean error (percentage points) caused by the mutation;
 - ``detected``: whether the verify check fails on the mutated pair;
 - ``min_detectable_pct``: the smallest mutation the check catches, by linearization of the worst mean error
@@ -46,6 +48,8 @@ log = logging.getLogger(__name__)
 
 #: the FE's relative change / the analytical relative change above which the FE counts as reusing the law
 SHARED_RATIO = 0.5
+#: the chain elements whose FE response can be a joint's contact-FE law
+JOINT_OF_ELEMENT = {"spherical_joint": "spherical", "universal_joint": "universal"}
 #: min_detectable_pct above this is reported as not detectable (a law off by 100x is not a plausible error)
 MAX_DETECTABLE_PCT = 10_000.0
 
@@ -76,6 +80,7 @@ class CoverageResult:
     base_error_pct: float
     elements: tuple
     seconds: float
+    joint_laws: dict = dataclasses.field(default_factory=dict)
 
     @property
     def base_passes(self) -> bool:
@@ -97,14 +102,15 @@ class CoverageResult:
                 for e in self.elements]
 
 
-def _deflections(case, points, directions, fe_models, fe_joints, analytical_joints):
+def _deflections(case, points, directions, fe_models, fe_joints, analytical_joints, joint_laws=None):
     """(analytical, FE) deflections along the load, each (n_points, n_directions) m."""
     from femcheck.fe_device.device_model import solve_point
     from femcheck.verify.analytical import run_analytical
 
     av = run_analytical(case, points, directions)
     a = np.array([[av.deflection(p, d, "detailed", analytical_joints) for d in directions] for p in points])
-    f = np.array([[solve_point(case, fe_models[p], ("detailed",), (fe_joints,), (d,)).cases[("detailed", fe_joints, d)]
+    f = np.array([[solve_point(case, fe_models[p], ("detailed",), (fe_joints,), (d,), joint_laws=joint_laws)
+                   .cases[("detailed", fe_joints, d)]
                    .deflection_m for d in directions] for p in points])
     return a, f, av
 
@@ -116,8 +122,11 @@ def _worst_mean_error_pct(a, f) -> float:
 
 def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh: str = "coarse",
                      fe_joints: str = "contact", analytical_joints: str = "released", jobs: int = 1,
-                     fe_models=None, progress=None) -> CoverageResult:
-    """Measure the coverage (module docstring). ``fe_models``: {point: PointModel} to reuse (else built)."""
+                     fe_models=None, progress=None, joint_laws=None) -> CoverageResult:
+    """Measure the coverage (module docstring). ``fe_models``: {point: PointModel} to reuse (else built);
+    ``joint_laws``: the contact-FE joint laws the FE uses (:class:`femcheck.fe_device.joint_laws.JointLaws`;
+    None: the closed forms)."""
+    from femcheck.fe_device.joint_laws import CLOSED_FORM
     from femcheck.verify.check import ERROR_THRESHOLDS
     from femcheck.verify.fe import run_fe
 
@@ -132,7 +141,8 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
         fe_models = fe.models
     note("FE models")
     threshold = 100 * ERROR_THRESHOLDS["detailed"]
-    a0, f0, av = _deflections(case, points, directions, fe_models, fe_joints, analytical_joints)
+    sources = (joint_laws or CLOSED_FORM).sources()
+    a0, f0, av = _deflections(case, points, directions, fe_models, fe_joints, analytical_joints, joint_laws)
     base = _worst_mean_error_pct(a0, f0)
     if base > threshold:
         log.warning("coverage: the unmutated model already fails the check (worst mean error %.2f %% > %.0f %%)",
@@ -142,11 +152,15 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
     out = []
     for e in ELEMENTS:
         variant = case.with_params(**{f"model.law_scale.{e}": factor})
-        a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints)
+        a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints, joint_laws)
         da = float(np.mean(np.abs(a1 / a0 - 1)))
         df = float(np.mean(np.abs(f1 / f0 - 1)))
         ratio = df / da if da > 0 else float("nan")
-        source = "shared_closed_form" if ratio >= SHARED_RATIO else "meshed"
+        joint = JOINT_OF_ELEMENT.get(ELEMENT_NAMES[e])
+        if ratio >= SHARED_RATIO:
+            source = "shared_closed_form"
+        else:
+            source = "contact_fe" if joint is not None and sources[joint] == "contact_fe" else "meshed"
         err = _worst_mean_error_pct(a1, f1)
         slope = (err - base) / mutation_pct                    # percentage points of error per % of mutation
         detected = err > threshold
@@ -165,5 +179,6 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
                  out[-1].share_pct, ratio, base, err)
     covered = sum(e.share_pct for e in out if e.min_detectable_pct is not None)
     return CoverageResult(mutation_pct=float(mutation_pct), covered_share_pct=float(covered), points=points, mesh=mesh,
+                          joint_laws=sources,
                           fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
                           base_error_pct=base, elements=tuple(out), seconds=time.perf_counter() - t0)

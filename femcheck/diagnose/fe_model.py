@@ -81,7 +81,9 @@ class DeviceFEReadingModel:
                 continue
             m = self.fe.models[p]
             k_act, K_lg = actuation_at(self.case, m)
+            if self.level != "detailed":   # the simplified level has no actuation element, no cable across the rail
+                K_lg = m.K_lg
             s = solve_state(K_lg, m.link.K, m.R_A, m.R_B, m.G, np.r_[f, 0.0, 0.0, 0.0], self.level, self.joints,
-                            params, friction, k_act)
+                            params, friction, k_act, getattr(self.fe, "joint_laws", None))
             out[rows] = s.twist[:3]
         return out

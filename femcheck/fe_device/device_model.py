@@ -130,11 +130,12 @@ class PointResult:
 
 
 def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, directions=None,
-                friction=None) -> PointResult:
+                friction=None, joint_laws=None) -> PointResult:
     """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`).
 
     ``contact`` joints exist at the detailed level only; ``friction`` (:class:`.joint_friction.JointFriction`)
-    defaults to the case's, with the theoretical tilt slip ratio 1.
+    defaults to the case's, with the theoretical tilt slip ratio 1; ``joint_laws``
+    (:class:`.joint_laws.JointLaws`): the contact-FE-measured joint laws (None: the closed forms).
     """
     from femcheck.chain import device_parameters
     from femcheck.fe_device.joint_friction import joint_friction
@@ -149,8 +150,10 @@ def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, direct
             if j == "contact" and lvl != "detailed":
                 continue
             for d in directions:
-                out[(lvl, j, d)] = load_case(case, K_lg, model.link.K, model.R_A, model.R_B, model.G,
-                                             lvl, j, d, params, friction, k_act)
+                # the simplified level has no actuation element (CONVENTIONS.md §5), so no cable across the rail
+                K_guide = K_lg if lvl == "detailed" else model.K_lg
+                out[(lvl, j, d)] = load_case(case, K_guide, model.link.K, model.R_A, model.R_B, model.G,
+                                             lvl, j, d, params, friction, k_act, joint_laws)
     t_min = None
     if k_act is not None:
         t_min = min_strand_tension(case, model, out, k_act)

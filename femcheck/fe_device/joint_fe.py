@@ -339,6 +339,8 @@ class JointResponse:
     stabilized_iterations: int = 0
     stabilization_force_share: float = 0.0
     residual_rel: float = 0.0
+    #: (n, 6, 6) stick tangent stiffness at every load level (``solve_joint(..., level_tangents=True)``), else None
+    level_tangent_stiffness: np.ndarray | None = None
 
     @property
     def fe_compliance(self) -> np.ndarray:
@@ -359,11 +361,12 @@ class JointResponse:
 
 
 def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
-                penetration_tol: float, max_iter: int = 100) -> JointResponse:
+                penetration_tol: float, max_iter: int = 100, level_tangents: bool = False) -> JointResponse:
     """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
 
     ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
-    approach at the smallest load, e.g. 1e-3 of the analytical one)."""
+    approach at the smallest load, e.g. 1e-3 of the analytical one). ``level_tangents``: also return the
+    stick tangent stiffness at every load level (a force ladder: :mod:`femcheck.fe_device.joint_laws`)."""
     from femcheck.fe.contact.condensed_solver import solve_condensed_contact
 
     t0 = time.perf_counter()
@@ -418,11 +421,15 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
                                    f"penetrates by {pen:.3g} m ({where}); widen CANDIDATE_ANGLE_RAD",
                                    list(res.residual_history), {"penetration_m": pen, "point": where})
     tangent, stiffness = _tangent(model, closed)
+    per_level = None
+    if level_tangents:
+        per_level = np.stack([_tangent(model, [c[sizes[j]:sizes[j + 1]] for j in range(len(model.pairs))])[1]
+                              for c in res.closed[:-1]] + [stiffness])
     return JointResponse(model.joint, loads, u, sec, tangent, stiffness, int(sum(int(c.sum()) for c in closed)),
                          res.iterations, res.factorizations, res.augmentations,
                          model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
                          model.condense_s, res.line_search_cuts, res.stabilized_iterations,
-                         res.stabilization_force_share, float(res.residual_history[-1]) / Fmax)
+                         res.stabilization_force_share, float(res.residual_history[-1]) / Fmax, per_level)
 
 
 def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:

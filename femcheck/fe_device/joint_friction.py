@@ -78,16 +78,19 @@ class JointFriction:
         return k_t * self.ball_radius_m**2, 16.0 / 3.0 * self.G_star_Pa * a**3, np.broadcast_to(
             k_line * self.pin_radius_m**2, np.shape(a)).copy()
 
-    def secant_stiffness(self, F, r_sp, r_uj) -> tuple[np.ndarray, np.ndarray]:
+    def secant_stiffness(self, F, r_sp, r_uj, stick=None) -> tuple[np.ndarray, np.ndarray]:
         """Secant rotational stiffnesses (N m/rad) for leg forces F (n,) N and joint rotations r_sp (n, 3)
-        (frame U: tilt x, tilt y, spin z) and r_uj (n, 2) (frame B: a1, a2), rad -> ((n, 3), (n, 2))."""
+        (frame U: tilt x, tilt y, spin z) and r_uj (n, 2) (frame B: a1, a2), rad -> ((n, 3), (n, 2)).
+        ``stick``: (k_tilt, k_spin, k_pin) to use instead of the closed forms of :meth:`stick_stiffness`
+        (the contact FE's measured stick stiffnesses, :mod:`femcheck.fe_device.joint_laws`)."""
         Mt, Ms, Mp = self.slip_moments(F)
-        kt, ks, kp = self.stick_stiffness(F)
+        kt, ks, kp = self.stick_stiffness(F) if stick is None else stick
         tilt = np.linalg.norm(r_sp[:, :2], axis=1)
         k_sp = np.empty((len(F), 3))
         k_sp[:, :2] = _secant(kt, Mt, tilt)[:, None]
         k_sp[:, 2] = _secant(ks, Ms, np.abs(r_sp[:, 2]))
-        k_uj = _secant(kp[:, None], Mp[:, None], np.abs(r_uj))
+        kp = np.asarray(kp, float)
+        k_uj = _secant(kp[:, None] if kp.ndim == 1 else kp, Mp[:, None], np.abs(r_uj))
         return k_sp, k_uj
 
 

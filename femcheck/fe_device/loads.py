@@ -68,13 +68,16 @@ class LoadState:
 
 
 def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, params, friction=None,
-                k_act=None) -> LoadState:
+                k_act=None, joint_laws=None) -> LoadState:
     """Equilibrium under ``wrench`` (6,) for 6 legs (K_lg (6, 6, 6), R_A, R_B (6, 3, 3), G (6, 6, 6)).
 
     ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses;
     ``friction``: :class:`femcheck.fe_device.joint_friction.JointFriction` (``contact`` joints only);
     ``k_act`` (6,) N/m: the actuation springs along the rails (default 1/c_act of eq. 44 from ``params``;
-    :mod:`femcheck.fe_device.actuation_fe` gives them from elements).
+    :mod:`femcheck.fe_device.actuation_fe` gives them from elements);
+    ``joint_laws``: :class:`femcheck.fe_device.joint_laws.JointLaws`, the contact-FE-measured law of each joint
+    type that has one (ball: secant F / δ_FE(F); U joint: lateral stick tangent and axial secant; the stick
+    rotational stiffnesses of ``contact`` joints), replacing the closed forms on the FE side; None: closed forms.
     """
     layout = joint_layout(level, joints)
     if level == "simplified":
@@ -84,40 +87,67 @@ def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, para
         return LoadState(t, uC, f, np.full(6, np.nan), 1, legs)
     c_uc, c_ub = float(np.squeeze(params.c_uc)), float(np.squeeze(params.c_ub))
     k_act = np.full(6, 1.0 / float(np.squeeze(params.c_act))) if k_act is None else np.asarray(k_act, float)
-    k_uj = np.tile([1.0 / c_uc, 1.0 / c_uc, 1.0 / (c_uc + c_ub)], (6, 1))
     Es, Rs, Fmin = (float(np.squeeze(v)) for v in (params.E_star_sp, params.R_star_sp, params.F_min_sp))
-    k_sp = np.full(6, (6.0 * Es**2 * Rs * Fmin) ** (1.0 / 3.0))
+    law_sp = law_uj = None
+    if joint_laws is not None:
+        law_sp, law_uj = joint_laws.spherical, joint_laws.universal
+
+    def translation_springs(F):
+        """(k_sp (6,) N/m isotropic, k_uj (6, 3) N/m in frame B) at the leg forces F (6,) N."""
+        k_sp = law_sp.secant(F) if law_sp is not None else F / hertz_approach(F, Es, Rs)
+        if law_uj is None:
+            return k_sp, np.tile([1.0 / c_uc, 1.0 / c_uc, 1.0 / (c_uc + c_ub)], (6, 1))
+        K = law_uj.component_stiffness(F)
+        return k_sp, np.stack([K[:, 0], K[:, 1], law_uj.secant(F)], axis=1)
+
+    def stick(F):
+        """(k_tilt, k_spin, k_pin) (6,) N m/rad: measured where a law is, else the closed forms."""
+        kt, ks, kp = friction.stick_stiffness(F)
+        if law_sp is not None:
+            K = law_sp.component_stiffness(F)
+            kt, ks = 0.5 * (K[:, 3] + K[:, 4]), K[:, 5]
+        if law_uj is not None:
+            kp = law_uj.component_stiffness(F)[:, 3:5]
+        return kt, ks, np.broadcast_to(np.asarray(kp).reshape(6, -1), (6, 2))
+
+    F = np.full(6, Fmin)
+    if law_sp is None:
+        # the closed form starts from the Hertz tangent at F_min (bit-identical to the baselines)
+        k_sp, k_uj = np.full(6, (6.0 * Es**2 * Rs * Fmin) ** (1.0 / 3.0)), translation_springs(F)[1]
+    else:
+        k_sp, k_uj = translation_springs(F)
     contact = joints == "contact"
     if contact:
         if friction is None:
             raise ValueError("contact joints need the joint friction data (femcheck.fe_device.joint_friction)")
-        k_tilt, k_spin, k_pin = friction.stick_stiffness(np.full(6, Fmin))  # start stuck, at F_min
+        k_tilt, k_spin, k_pin = stick(F)   # start stuck, at F_min
         k_rot_sp = np.stack([k_tilt, k_tilt, k_spin], axis=1)
-        k_rot_uj = np.stack([k_pin, k_pin], axis=1)
+        k_rot_uj = np.array(k_pin)
 
-    def springs(k_sp):
+    def springs(k_sp, k_uj):
         if not contact:
             return k_sp, k_uj
         return (np.hstack([np.repeat(k_sp[:, None], 3, axis=1), k_rot_sp]), np.hstack([k_uj, k_rot_uj]))
 
     for it in range(1, MAX_ITERATIONS + 1):
-        ks, ku = springs(k_sp)
+        ks, ku = springs(k_sp, k_uj)
         legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=ks, k_uj=ku)
         t, uC = solve_platform(legs.K, G, wrench)
         f = np.linalg.norm(np.einsum("iab,ib->ia", legs.K, uC)[:, :3], axis=1)
         F = np.maximum(f, Fmin)
-        k_new = F / hertz_approach(F, Es, Rs)
-        change = np.max(np.abs(k_new - k_sp) / k_sp)
-        k_sp = k_new
+        k_new, kuj_new = translation_springs(F)
+        change = max(float(np.max(np.abs(k_new - k_sp) / k_sp)), _relative_change(kuj_new, k_uj))
+        k_sp, k_uj = k_new, kuj_new
         if contact:
             q = legs.interior(uC)["q"]
             r_sp = q[:, legs.blocks["sp"]][:, 3:6]
             r_uj = q[:, legs.blocks["uj"]][:, 3:5]
-            new_sp, new_uj = friction.secant_stiffness(F, r_sp, r_uj)
+            kt, ks_, kp = stick(F)
+            new_sp, new_uj = friction.secant_stiffness(F, r_sp, r_uj, stick=(kt, ks_, kp))
             change = max(change, _relative_change(new_sp, k_rot_sp), _relative_change(new_uj, k_rot_uj))
             k_rot_sp, k_rot_uj = new_sp, new_uj
         if change < FIXED_POINT_RTOL:
-            ks, ku = springs(k_sp)
+            ks, ku = springs(k_sp, k_uj)
             legs = condense_legs(K_lg, K_link, R_A, R_B, layout, k_act=k_act, k_sp=ks, k_uj=ku)
             t, uC = solve_platform(legs.K, G, wrench)
             return LoadState(t, uC, f, k_sp, it, legs)
@@ -144,9 +174,9 @@ class LoadCaseResult:
 
 
 def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, direction: str, params,
-              friction=None, k_act=None) -> LoadCaseResult:
+              friction=None, k_act=None, joint_laws=None) -> LoadCaseResult:
     """Apply the protocol of ``level`` along ``direction`` and return the deflection (module docstring);
-    ``k_act``: see :func:`solve_state`."""
+    ``k_act``, ``joint_laws``: see :func:`solve_state`."""
     d = direction_unit(direction)
     L = case.loads
     if level == "simplified":
@@ -157,9 +187,9 @@ def load_case(case, K_lg, K_link, R_A, R_B, G, level: str, joints: str, directio
     else:
         P = L.detailed_test_N
         sp_ = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[L.detailed_preload_N * d, 0, 0, 0], level, joints, params,
-                          friction, k_act)
+                          friction, k_act, joint_laws)
         st = solve_state(K_lg, K_link, R_A, R_B, G, np.r_[(L.detailed_preload_N + P) * d, 0, 0, 0], level, joints,
-                         params, friction, k_act)
+                         params, friction, k_act, joint_laws)
         states, twist = (sp_, st), st.twist - sp_.twist
         inc = st.legs.interior(st.u_C - sp_.u_C)["energy"]
     e = inc.sum(axis=0)

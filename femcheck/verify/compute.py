@@ -77,12 +77,15 @@ def has_contact_joints(fe) -> bool:
 
 def fe_baseline_values(fe) -> dict[str, float]:
     """Baseline keys; the contact joints are keyed by where their ball slip moment came from (``contact``:
-    theory, ρ = 1, ``--no-joint-fe``; ``contact_fe_slip``: the ball tilt contact FE)."""
+    theory, ρ = 1, ``--no-joint-fe``; ``contact_fe_slip``: the ball tilt contact FE), and the detailed level's
+    joints by their laws (``+joint_fe``: measured by the joints' contact FE, else the closed forms)."""
     measured = fe.friction is not None and fe.friction.tilt_slip_ratio != 1.0
+    # detailed joints with the contact-FE-measured joint laws are other numbers than with the closed forms
+    laws = "+joint_fe" if getattr(fe, "joint_laws", None) is not None and fe.joint_laws.any_measured else ""
 
-    def name(j):
-        return "contact_fe_slip" if j == "contact" and measured else j
-    return {f"fe/{fe.mesh.level}/{fe.kind}/{lvl}/{name(j)}/{p}/{d}/deflection_m": c.deflection_m
+    def name(lvl, j):
+        return ("contact_fe_slip" if j == "contact" and measured else j) + (laws if lvl == "detailed" else "")
+    return {f"fe/{fe.mesh.level}/{fe.kind}/{lvl}/{name(lvl, j)}/{p}/{d}/deflection_m": c.deflection_m
             for p, r in fe.results.items() for (lvl, j, d), c in r.cases.items()}
 
 

@@ -16,17 +16,20 @@ CONVERGENCE_TOL = 0.02
 
 
 def mesh_convergence(case, point: str = "P0", levels=("simplified", "detailed"), mesh_levels=CONVERGENCE_LEVELS,
-                     jobs: int = 1, progress=None, known: dict | None = None) -> tuple[list[dict], list[dict]]:
+                     jobs: int = 1, progress=None, known: dict | None = None,
+                     joint_laws=None) -> tuple[list[dict], list[dict]]:
     """Rows {level, joints, direction, deflection (mm) per mesh level, change vs the finest (%)} and one row
     per mesh (sizes, DOFs, wall time). ``known`` {mesh level: FEVerification} reuses runs that contain ``point``
-    (same mesh and model, so the same numbers)."""
+    (same mesh and model, so the same numbers). ``joint_laws``: the contact-FE joint laws, held fixed over the
+    device mesh levels (this study refines the guideway and link meshes; the joints' own mesh convergence is
+    ``check-joints --mesh``, docs/joint_fe.md)."""
     from femcheck.verify.fe import run_fe
     known = known or {}
     runs = {}
     for m in mesh_levels:
         k = known.get(m)
         ok = k is not None and point in k.results and all(lv in k.levels for lv in levels)
-        runs[m] = k if ok else run_fe(case, (point,), levels, m, jobs, progress=progress)
+        runs[m] = k if ok else run_fe(case, (point,), levels, m, jobs, progress=progress, joint_laws=joint_laws)
     finest = runs[mesh_levels[-1]]
     rows = []
     for key, c in finest.results[point].cases.items():

@@ -45,6 +45,13 @@ class FEVerification:
     fixed_point_iterations: int
     linear_solver: str
     friction: object = None
+    joint_laws: object = None
+
+    @property
+    def joint_law_sources(self) -> dict:
+        """``{"spherical": "contact_fe" | "closed_form", "universal": …}`` of the detailed level."""
+        from femcheck.fe_device.joint_laws import CLOSED_FORM
+        return (self.joint_laws or CLOSED_FORM).sources()
 
     def deflection(self, point, direction, level, joints) -> float:
         return self.results[point].cases[(level, joints, direction)].deflection_m
@@ -56,11 +63,13 @@ class FEVerification:
 
 
 def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default", jobs: int = 1,
-           kind: str = "solid", progress=None, friction=None) -> FEVerification:
+           kind: str = "solid", progress=None, friction=None, joint_laws=None) -> FEVerification:
     """Build and solve the device FE model at ``points`` for ``levels`` (module docstring).
 
     ``friction``: joint friction data of the ``contact`` joints (default: the case's, tilt slip ratio 1;
-    the verification passes the ratio measured by the contact FE of the spherical joint).
+    the verification passes the ratio measured by the contact FE of the spherical joint); ``joint_laws``
+    (:class:`femcheck.fe_device.joint_laws.JointLaws`): the contact-FE-measured joint laws of the detailed
+    level (None: the closed forms).
     """
     t0 = time.perf_counter()
     pts = as_point_set(case, points)      # the run's PointSet: no second inverse kinematics
@@ -93,7 +102,7 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
     for k, p in enumerate(points):
         m = point_model(case, legs, k, p, [got[(k, i)] for i in range(6)], link)
         models[p] = m
-        results[p] = solve_point(case, m, levels, FE_JOINTS, friction=friction)
+        results[p] = solve_point(case, m, levels, FE_JOINTS, friction=friction, joint_laws=joint_laws)
     t_end = time.perf_counter()
     ses = [link] + list(got.values())
     timings = {"meshing": sum(s.mesh_s for s in ses), "assembly": sum(s.assembly_s for s in ses),
@@ -107,4 +116,4 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
                           dofs={"link": link.dofs, "guideway_min": min(gdofs), "guideway_max": max(gdofs)},
                           tets={"link": link.n_tets, "guideway_min": min(gtets), "guideway_max": max(gtets)},
                           fixed_point_iterations=int(iters), linear_solver=link.solver or "dense",
-                          friction=friction)
+                          friction=friction, joint_laws=joint_laws)

@@ -165,7 +165,8 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
 def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=None,
                update_baseline: bool = False, command: str = "femcheck verify", levels=(), mesh: str = "default",
                jobs: int = 1, progress=None, fe_kind: str = "solid", fe_baseline_path=None, vtu: bool = True,
-               pngs: bool = True, convergence_point: str | None = None, joint_fe: bool = False) -> VerifyRun:
+               pngs: bool = True, convergence_point: str | None = None, joint_fe: bool = False,
+               joint_mesh: str = "coarse") -> VerifyRun:
     """Run the verification on ``case`` and write everything into ``out_dir`` (atomically, file by file).
 
     ``levels``: FE levels to run ('simplified', 'detailed'; empty = analytical only); ``mesh``: FE mesh
@@ -173,7 +174,10 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``convergence_point``: run the
     mesh-convergence study (coarse/default/fine) at this point and write ``mesh_convergence.csv``;
     ``joint_fe``: run the contact FE of the ball alone under tilt (:func:`femcheck.verify.contact_joints.ball_tilt_study`)
-    and give the device's contact joints its measured slip ratio (else the theoretical 1).
+    and give the device's contact joints its measured slip ratio (else the theoretical 1); measure the laws of
+    both passive joints by their contact FE at ``joint_mesh`` over the device's force ladder
+    (:mod:`femcheck.fe_device.joint_laws`) and use them in the detailed device FE instead of the closed forms
+    (``manifest.json`` ``joint_laws``); run the joint table.
     """
     t0 = time.perf_counter()
     from femcheck.case.solver_options import apply as apply_solver_choice
@@ -197,6 +201,12 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         tilt = ball_tilt_study(case, progress)
         friction = joint_friction(case, tilt_slip_ratio=tilt_slip_ratio(tilt))
         t_tilt = time.perf_counter() - tc
+    joint_laws, t_laws = None, 0.0
+    if levels and joint_fe and "detailed" in levels:
+        from femcheck.fe_device.joint_laws import measure_joint_laws
+        tc = time.perf_counter()
+        joint_laws = measure_joint_laws(case, joint_mesh, progress=progress)
+        t_laws = time.perf_counter() - tc
     joint_results, t_joints = [], 0.0
     if levels and joint_fe and "detailed" in levels:
         # the joint table (issue 14 part 3): contact FE of each passive joint at the coarse joint mesh
@@ -204,11 +214,12 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         from femcheck.fe_device.joint_check import check_joint
         from femcheck.fe_device.joint_fe import JOINTS as JOINT_TYPES
         tc = time.perf_counter()
-        joint_results = [check_joint(case, j, "coarse", "P0") for j in JOINT_TYPES]
+        joint_results = [check_joint(case, j, joint_mesh, "P0") for j in JOINT_TYPES]
         t_joints = time.perf_counter() - tc
     if levels:
         from femcheck.verify.fe import run_fe
-        fe = run_fe(case, pts, tuple(levels), mesh, jobs, kind=fe_kind, progress=progress, friction=friction)
+        fe = run_fe(case, pts, tuple(levels), mesh, jobs, kind=fe_kind, progress=progress, friction=friction,
+                    joint_laws=joint_laws)
 
     sections: list[Section] = []
     rows = deflection_rows(av)
@@ -252,6 +263,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
             put("joint_fe.json", json.dumps(joint_results, indent=2) + "\n")
             sections.append(joint_table_section(jrows))
             fe_times["joint_contact_fe"] = round(t_joints, 2)
+        fe_times["joint_laws_contact_fe"] = round(t_laws, 2)
         if has_contact_joints(fe) and len(fe.points) == 9:
             from femcheck.verify.contact_diagnosis import diagnose_contact_fe
             tc = time.perf_counter()
@@ -273,7 +285,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         # which elements does this FE check at all? mutate each law, reuse the condensed super-elements
         from femcheck.coverage import element_coverage
         tc = time.perf_counter()
-        coverage = element_coverage(case, fe.points, mesh=mesh, fe_models=fe.models)
+        coverage = element_coverage(case, fe.points, mesh=mesh, fe_models=fe.models, joint_laws=fe.joint_laws)
         put("coverage.json", json.dumps(coverage.as_json(), indent=2, default=float) + "\n")
         cov_rows = coverage.rows()
         put("coverage.csv", tables.to_csv(cov_rows))
@@ -283,7 +295,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
             note=f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
                  f"analytical ({coverage.analytical_joints}) and FE ({coverage.fe_joints} joints) rerun at "
                  f"{', '.join(coverage.points)}. fe_source from behaviour: 'meshed' when the FE does not move with the "
-                 "law (an independent model), 'shared_closed_form' when it moves alike (the FE reuses the law: an "
+                 "law (an independent model; 'contact_fe' where that model is the joint's contact FE), "
+                 "'shared_closed_form' when it moves alike (the FE reuses the law: an "
                  "agreement there holds by construction). femcheck coverage, docs/verify.md."))
         fe_times["coverage"] = round(time.perf_counter() - tc, 2)
     checks: list[Check] = []
@@ -292,7 +305,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         from femcheck.verify.convergence import CONVERGENCE_TOL, mesh_convergence
         tc = time.perf_counter()
         conv_rows, conv_mesh = mesh_convergence(case, convergence_point, tuple(levels), jobs=jobs, progress=progress,
-                                                 known={mesh: fe} if fe_kind == "solid" else None)
+                                                 known={mesh: fe} if fe_kind == "solid" else None,
+                                                 joint_laws=joint_laws)
         put("mesh_convergence.csv", tables.to_csv(conv_rows))
         fmt = {k: "{:.4f}" if k.endswith("_mm") else "{:.2f}" for k in conv_rows[0] if k.endswith(("_mm", "_%"))}
         sections.append(Section(f"Mesh convergence at {convergence_point} (deflection mm; change vs the fine mesh %, "
@@ -341,6 +355,10 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                    "dofs": fe.dofs, "tets": fe.tets, "linear_solver": fe.linear_solver,
                    "solver_iterations": {"linear": 1, "hertz_fixed_point_max": fe.fixed_point_iterations},
                    "jobs": jobs, "timings_s": {**fe.timings_s, **fe_times},
+                   "joint_laws": fe.joint_law_sources,
+                   "joint_law_details": (joint_laws.details() if joint_laws is not None else
+                                         {j: {"source": "closed_form", "why": "--no-joint-fe" if joint_fe is False
+                                              else "no detailed FE level"} for j in fe.joint_law_sources}),
                    "mean_rel_error_pct": {f"{key[0]}/{key[1]}" + ("" if key[1] == key[-1] else f"_vs_{key[-1]}_fe"):
                                           {k.split()[0]: round(v, 3) for k, v in average_row(tab).items()}
                                           for key, tab in fe_tabs.items()},
