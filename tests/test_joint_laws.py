@@ -153,3 +153,27 @@ def test_measured_laws_against_hertz_and_the_clearance(tmp_path, monkeypatch):
     c = float(case.solid.universal_joint.pin_clearance_m)
     assert 1.0 * c < laws.universal.approach_m[0] < 2.0 * c + 5e-6
     assert laws.sources() == {"spherical": "contact_fe", "universal": "contact_fe"}
+
+
+def test_extended_case_puts_the_measured_ratio_into_the_analytical_joint_laws(tmp_path):
+    """check-joints --extended-case: the written case loads, its analytical joint compliances are the closed forms
+    times the FE / closed-form ratio (rtol 1e-5: the ratio is written with 6 significant digits), and a case
+    that already sets [model.law_scale] is refused."""
+    from pathlib import Path
+    from femcheck.chain import device_parameters
+    from femcheck.errors import FemcheckError
+    from femcheck.fe_device.joint_check import extended_case_text
+    results = [{"joint": "spherical", "mesh": "coarse", "point": "P0", "fe_component_compliance": [0, 0, 1.4e-6],
+                "analytical_compliance": [[0] * 3, [0] * 3, [0, 0, 1.6e-6]]},
+               {"joint": "universal", "mesh": "coarse", "point": "P0", "fe_component_compliance": [0, 0, 8.0e-7],
+                "analytical_compliance": [[0] * 3, [0] * 3, [0, 0, 1.6e-6]]}]
+    text = Path(CASE).read_text()
+    out = tmp_path / "extended.toml"
+    out.write_text(extended_case_text(text, CASE, results))
+    base, ext = device_parameters(femcheck.load_case(CASE)), device_parameters(femcheck.load_case(out))
+    c = lambda p: float(np.squeeze(p.c_uc)) + float(np.squeeze(p.c_ub))
+    assert c(ext) / c(base) == pytest.approx(0.5, rel=1e-5)
+    # Hertz compliance ~ E*^(-2/3): a compliance factor s scales E* by s^(-3/2)
+    assert float(np.squeeze(ext.E_star_sp)) / float(np.squeeze(base.E_star_sp)) == pytest.approx(0.875 ** -1.5, rel=1e-5)
+    with pytest.raises(FemcheckError, match="already set"):
+        extended_case_text(out.read_text(), str(out), results)

@@ -27,6 +27,9 @@ def register(app: typer.Typer) -> None:
         point: str = typer.Option("P0", "--point", help="test point P0..P8 whose load the joints carry"),
         json_out: Optional[str] = typer.Option(None, "--json", help="write JSON to this path ('-' = stdout)"),
         csv_out: Optional[Path] = typer.Option(None, "--csv", help="write the joint table CSV to this path"),
+        extended_case: Optional[Path] = typer.Option(None, "--extended-case", help="write a copy of CASE whose "
+                                                     "[model.law_scale] puts the FE-measured joint laws into the "
+                                                     "analytical model (for diagnose, sweep, map, stiffness)"),
     ) -> None:
         """Contact FE of each passive joint under the device load vs the closed-form joint laws."""
         from femcheck.case import load_case
@@ -38,10 +41,17 @@ def register(app: typer.Typer) -> None:
         if joint not in JOINTS + ("all",):
             raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)}, all")
         from femcheck.report.atomic import refuse_input_overwrite
-        for out in (json_out if json_out not in (None, "-") else None, csv_out):
+        for out in (json_out if json_out not in (None, "-") else None, csv_out, extended_case):
             if out:
                 refuse_input_overwrite(out, [case_path])
         case = load_case(case_path)
+        if extended_case:
+            import tomllib
+            if joint != "all":
+                raise FemcheckError("--extended-case needs both joints: use --joint all")
+            if "law_scale" in tomllib.loads(Path(case_path).read_text()).get("model", {}):
+                raise FemcheckError(f"{case_path}: [model.law_scale] is already set; --extended-case expects a case "
+                                    "without it")
         names = JOINTS if joint == "all" else (joint,)
         results = []
         try:
@@ -57,6 +67,9 @@ def register(app: typer.Typer) -> None:
             write_text_atomic(json_out, text + "\n")
         if csv_out:
             write_text_atomic(csv_out, write_joint_table_csv(joint_table_rows(results)))
+        if extended_case:
+            from femcheck.fe_device.joint_check import extended_case_text
+            write_text_atomic(extended_case, extended_case_text(Path(case_path).read_text(), str(case_path), results))
         if json_out == "-":
             return
         from rich.table import Table

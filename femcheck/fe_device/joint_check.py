@@ -158,6 +158,36 @@ def joint_law_adjustments(results: list[dict]):
     return ChainAdjustments(element_scale=scale)
 
 
+def law_scale_factors(results: list[dict]) -> dict:
+    """``{"sp": x, "uj": y}``: FE / closed-form axial (eq. 1 secant) compliance of each joint in ``results``
+    (``check_joint`` objects): the ``[model.law_scale]`` entries that put the FE-measured joint laws into the
+    analytical model (the axial law is the one a leg with ideal passive joints loads, :func:`joint_law_adjustments`)."""
+    out = {}
+    for res in results:
+        fe, an = res["fe_component_compliance"][2], res["analytical_compliance"][2][2]
+        if fe is None or not an:
+            raise FemcheckError(f"{res['joint']} joint: no finite axial compliance to build the joint law from")
+        out["sp" if res["joint"] == "spherical" else "uj"] = float(fe) / float(an)
+    return out
+
+
+def extended_case_text(case_text: str, case_path: str, results: list[dict]) -> str:
+    """The case file ``case_text`` plus a ``[model.law_scale]`` table with :func:`law_scale_factors`: an
+    extended analytical model whose joint laws are the contact FE's, for ``femcheck diagnose``, ``sweep``,
+    ``map`` and ``stiffness`` (they read the case). Refuses a case that already sets ``[model.law_scale]``."""
+    import tomllib
+    doc = tomllib.loads(case_text)
+    if "law_scale" in doc.get("model", {}):
+        raise FemcheckError(f"{case_path}: [model.law_scale] is already set; expected a case without it "
+                            "(the extended case multiplies the closed-form joint laws by the FE / closed-form ratio)")
+    f = law_scale_factors(results)
+    lines = ["", "[model.law_scale]   # written by femcheck check-joints --extended-case: the FE-measured joint laws",
+             "                    # (axial eq. 1 secant of the contact FE / the closed form, mesh "
+             f"{results[0]['mesh']}, point {results[0]['point']})"]
+    lines += [f"{k} = {v:.6g}" for k, v in f.items()]
+    return case_text.rstrip("\n") + "\n" + "\n".join(lines) + "\n"
+
+
 def joint_table_html(rows: list[dict]) -> str:
     """The joint table as an HTML section for ``reports/verify/report.html`` (the integrator adds it
     through the verify report's section API): compliances in SI, error %, the flagged laws named."""
