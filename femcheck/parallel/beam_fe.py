@@ -32,6 +32,7 @@ class _Model:
         self.nodes: list[tuple[np.ndarray, dict]] = []
         self.springs: list[tuple[int, np.ndarray]] = []
         self.beams: list[tuple] = []  # (node a, node b, E, G, section, orientation, shear)
+        self.solids: list[tuple] = []  # (node a, node b, K (12, 12) in the global frame): condensed solid links
 
     def master(self, k: int) -> int:
         s = self.n_master
@@ -56,6 +57,9 @@ class _Model:
             Ke = assemble_beam_stiffness(pts, [[0, 1]], E, G, sec, orientation=orient, shear=shear).toarray()
             Te = np.vstack([T[6 * a:6 * a + 6], T[6 * b:6 * b + 6]])
             K += Te.T @ Ke @ Te
+        for a, b, Kg in self.solids:
+            Te = np.vstack([T[6 * a:6 * a + 6], T[6 * b:6 * b + 6]])
+            K += Te.T @ Kg @ Te
         for s, k in self.springs:
             K[s:s + len(k), s:s + len(k)] += np.diag(k)
         return K
@@ -100,10 +104,17 @@ def _beam_section(ln) -> BeamSection:
                        kappa_x=float(sec.shear_factor), kappa_y=float(sec.shear_factor))
 
 
-def _segment(fe: _Model, a: int, b: int, ln, orient, n_el: int, shear: bool) -> None:
+def _segment(fe: _Model, a: int, b: int, ln, orient, n_el: int, shear: bool, parts: str = "beam",
+             mesh: str = "default") -> None:
     if ln.section is None:
         raise NotImplementedError(f"link {ln.name!r} is rigid; the beam FE meshes only tube and bar links")
     pa, pb = fe.nodes[a][0], fe.nodes[b][0]
+    if parts == "solid":
+        from femcheck.fe.beam import _to_global, local_frames
+        from femcheck.parallel.solid_links import link_stiffness
+        R, L = local_frames(np.array([pa, pb]), [[0, 1]], orient)
+        fe.solids.append((a, b, _to_global(link_stiffness(ln.spec, float(L[0]), mesh)[None], R)[0]))
+        return
     ids = [a] + [fe.master_node(pa + (pb - pa) * t) for t in np.arange(1, n_el) / n_el] + [b]
     sec = _beam_section(ln)
     for i, j in zip(ids[:-1], ids[1:]):
@@ -112,12 +123,16 @@ def _segment(fe: _Model, a: int, b: int, ln, orient, n_el: int, shear: bool) -> 
 
 def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str = "released",
                         hertz_stiffness: dict | None = None, elements_per_link: int = 2,
-                        state: DeviceState | None = None) -> np.ndarray:
+                        state: DeviceState | None = None, parts: str = "beam", mesh: str = "default") -> np.ndarray:
     """(n, 6, 6) TCP stiffness of the beam FE of ``device`` at TCP poses (n, 6) (m, rad).
 
     ``hertz_stiffness``: {(leg, joint): (n,)} N/m of the Hertz point contacts (``ParallelResult.hertz_stiffness``);
-    required for a detailed model with Hertz point contacts.
+    required for a detailed model with Hertz point contacts. ``parts``: ``"beam"`` (beam elements: the analytical
+    cantilever, a check of the chain algebra) or ``"solid"`` (each link meshed and condensed,
+    :mod:`femcheck.parallel.solid_links`, at ``mesh`` level: a check of the link laws too).
     """
+    if parts not in ("beam", "solid"):
+        raise ValueError(f"parts = {parts!r}; expected beam or solid")
     state = state if state is not None else solve_legs(device, poses)
     if model == "detailed" and any(leg.hertz_point for leg in device.legs) and hertz_stiffness is None:
         raise ValueError("hertz_stiffness: required for the detailed model (the Hertz contacts' linearization)")
@@ -139,7 +154,7 @@ def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str =
                 if jt == "P":
                     mid = 0.5 * (s.centres[p, ln.start] + s.centres[p, ln.end])
                     before = fe.master_node(mid)
-                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear, parts, mesh)
                     cursor = fe.node(mid, _plus(fe.nodes[before][1], y, B))
                     continue
                 c = int(leg.joint_centre[k])
@@ -148,12 +163,12 @@ def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str =
                     cursor = fe.node(pos, _plus({}, y, B))
                 elif c < last:
                     before = fe.master_node(pos)
-                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear, parts, mesh)
                     cursor = fe.node(pos, _plus(fe.nodes[before][1], y, B))
                     link = c
                 else:
                     before = fe.node(pos, _plus({0: G}, y, B, -1.0))
-                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear)
+                    _segment(fe, cursor, before, ln, orient, elements_per_link, device.beam_shear, parts, mesh)
         K = fe.stiffness()
         Ktt, Kto, Koo = K[:6, :6], K[:6, 6:], K[6:, 6:]
         KT = Ktt - Kto @ np.linalg.solve(Koo, Kto.T)

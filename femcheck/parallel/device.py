@@ -42,6 +42,8 @@ class LinkElement:
     G: float
     x_axis: np.ndarray
     has_prismatic: bool
+    #: the case's link description (section, material), for the solid links (:mod:`femcheck.parallel.solid_links`)
+    spec: object = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,7 +211,7 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
         if np.linalg.norm(x) < 1e-9:
             raise DeviceError(f"legs[{i}].links[{m}].x_axis", f"{who}: the section x axis lies along the link")
         links.append(LinkElement(name=ls.name, start=m, end=m + 1, section=section, E=E, G=G, x_axis=_unit(x),
-                                 has_prismatic=m in prismatic_links))
+                                 has_prismatic=m in prismatic_links, spec=ls))
 
     hp, hl = {}, {}
     for k, j in enumerate(spec.joints):
