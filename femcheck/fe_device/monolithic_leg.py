@@ -66,6 +66,12 @@ log = logging.getLogger(__name__)
 
 #: agreement asked of the two leg models (issue 14 part 4)
 AGREEMENT_REL = 0.02
+#: force-balance tolerance of the leg's contact solve, ‖r‖ ≤ LEG_RTOL F_20. The joint FE uses 1e-9; the leg's
+#: condensed system carries the frictionless mechanisms of the leg (the ball sliding on its seat, the pins
+#: sliding along their bores; they carry no load), whose near-zero modes the iteration-matrix spring slows
+#: down: at the preload the residual stalls at ≈ 5e-9 F_20 (measured at P0, coarse). The final residual is
+#: reported (``residual_rel``).
+LEG_RTOL = 1e-7
 
 
 @dataclasses.dataclass(frozen=True)
@@ -294,6 +300,7 @@ class MonolithicLegResult:
     (monolithic − substructured) / substructured, ``relative_difference_total`` of the F20 values;
     monolithic solve: ``dofs`` (P2 mesh), ``free_dofs``, ``retained`` (condensed), ``contact_points``,
     ``candidate_points``, ``closed_points``, ``iterations``, ``factorizations``, ``augmentations``,
+    (``joint_*``: the same comparison for the joints' share of the increment alone);
     ``line_search_cuts``, ``stabilization_force_share``, ``residual_rel``, ``condense_s``, ``seconds``.
     """
 
@@ -330,6 +337,24 @@ class MonolithicLegResult:
         return (self.increment_monolithic_m - self.increment_substructured_m) / self.increment_substructured_m
 
     @property
+    def joint_increment_monolithic_m(self) -> float:
+        """The joints' share of the monolithic increment: minus the super-elements' F (c_lg + c_link), m."""
+        s, F = self.substructured, self.load.loads_N
+        return self.increment_monolithic_m - (F[1] - F[0]) * (s.guideway_m_per_N + s.link_m_per_N)
+
+    @property
+    def joint_increment_substructured_m(self) -> float:
+        """δ_sp + δ_uj increment of the two joint contact FE solves, m."""
+        s = self.substructured
+        return float(s.spherical_m[-1] - s.spherical_m[0] + s.universal_m[-1] - s.universal_m[0])
+
+    @property
+    def joint_relative_difference(self) -> float:
+        """Relative difference of the joints' share alone (the bodies' own compliances agree by construction:
+        same meshes): what the substructuring of the joints changes."""
+        return (self.joint_increment_monolithic_m - self.joint_increment_substructured_m) / self.joint_increment_substructured_m
+
+    @property
     def relative_difference_total(self) -> float:
         m, s = self.displacement_monolithic_m[-1], self.displacement_substructured_m[-1]
         return float((m - s) / s)
@@ -351,6 +376,9 @@ class MonolithicLegResult:
                 "increment_substructured_m": self.increment_substructured_m,
                 "relative_difference": self.relative_difference,
                 "relative_difference_total": self.relative_difference_total,
+                "joint_increment_monolithic_m": self.joint_increment_monolithic_m,
+                "joint_increment_substructured_m": self.joint_increment_substructured_m,
+                "joint_relative_difference": self.joint_relative_difference,
                 "substructured_guideway_m_per_N": s.guideway_m_per_N, "substructured_link_m_per_N": s.link_m_per_N,
                 "substructured_spherical_m": s.spherical_m.tolist(), "substructured_universal_m": s.universal_m.tolist(),
                 "substructured_joint_iterations": s.joint_iterations, "substructured_joint_dofs": s.joint_dofs,
@@ -366,7 +394,7 @@ def check_monolithic_leg(case, point: str = "P0", mesh: str = "coarse", chain: i
     t0 = time.perf_counter()
     model = build_monolithic_leg(case, load, mesh)
     # the platform pushes C_p along −u (−z of the link frame); its other five components are held
-    r = jf.solve_joint(model, load.loads_N, -1.0, penetration_tol=_penetration_tol(case, load.loads_N))
+    r = jf.solve_joint(model, load.loads_N, -1.0, penetration_tol=_penetration_tol(case, load.loads_N), rtol=LEG_RTOL)
     seconds = time.perf_counter() - t0
     log.info("monolithic leg %s chain %d: %d DOFs, %d retained, %d iterations, %.1f s", load.point, load.chain,
              model.dofs, model.retained, r.iterations, seconds)
