@@ -56,9 +56,10 @@ def test_placed_guideway_is_the_guideway_super_element(case):
     uA = load.R_A.T @ load.u
     # same mesh, rotated frame: agreement to solver round-off
     assert delta == pytest.approx(float(uA @ np.linalg.inv(lg.K)[:3, :3] @ uA), rel=1e-7)
-    # and the Euler–Bernoulli cantilever within 5 % (shear and clamp effects at L/b ≈ 15; coarse P2 mesh)
+    # and the Euler–Bernoulli cantilever within 2 % (shear and clamp effects at L/b ≈ 15, coarse P2 mesh:
+    # measured −0.55 %)
     beam = guideway_element(case, load.slider_m, "beam")
-    assert delta == pytest.approx(float(uA @ np.linalg.inv(beam.K)[:3, :3] @ uA), rel=0.05)
+    assert delta == pytest.approx(float(uA @ np.linalg.inv(beam.K)[:3, :3] @ uA), rel=0.02)
 
 
 def test_part_sizes_follow_the_mesh_level(case):
