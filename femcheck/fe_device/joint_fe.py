@@ -361,12 +361,14 @@ class JointResponse:
 
 
 def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
-                penetration_tol: float, max_iter: int = 100, level_tangents: bool = False) -> JointResponse:
+                penetration_tol: float, max_iter: int = 100, level_tangents: bool = False,
+                rtol: float = 1e-9) -> JointResponse:
     """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
 
     ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
-    approach at the smallest load, e.g. 1e-3 of the analytical one). ``level_tangents``: also return the
-    stick tangent stiffness at every load level (a force ladder: :mod:`femcheck.fe_device.joint_laws`)."""
+    approach at the smallest load, e.g. 1e-3 of the analytical one); ``rtol``: converged when ‖r‖ ≤ rtol F_max
+    with an unchanged active set. ``level_tangents``: also return the stick tangent stiffness at every load
+    level (a force ladder: :mod:`femcheck.fe_device.joint_laws`)."""
     from femcheck.fe.contact.condensed_solver import solve_condensed_contact
 
     t0 = time.perf_counter()
@@ -398,7 +400,7 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
     # closed (the candidates are the loaded lines only, :func:`_candidates`)
     closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m
     res = solve_condensed_contact(model.S[np.ix_(keep, keep)], f, B, g0, eps, w, [F / Fmax for F in loads],
-                                  initial_closed=g0 <= closure, penetration_tol=penetration_tol, max_iter=max_iter,
+                                  initial_closed=g0 <= closure, penetration_tol=penetration_tol, max_iter=max_iter, rtol=rtol,
                                   point_info=point_info)
     u = axis_sign * res.u[:, ax]
     sec = float((u[-1] - u[0]) / (loads[-1] - loads[0]))
