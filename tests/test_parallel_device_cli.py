@@ -52,14 +52,22 @@ def test_map_writes_a_png(path, tmp_path):
 
 @pytest.mark.parametrize("path", CASES)
 def test_verify_writes_tables_and_passes_check(path, tmp_path):
+    """verify on a parallel device: the FE with solid links (coarse; P0, where the symmetric legs share one link
+    mesh) within 2 % of the analytical model (measured 0.01-0.7 %: shear and the rigid end faces, which the
+    Euler-Bernoulli cantilevers leave out), and the FE with beam links to round-off (1e-6 %)."""
     out = tmp_path / "run"
-    res = runner.invoke(get_app(), ["verify", str(path), "--points", "P0,P7", "--out", str(out), "--check"])
+    res = runner.invoke(get_app(), ["verify", str(path), "--points", "P0", "--mesh", "coarse", "--out", str(out),
+                                    "--check"])
     assert res.exit_code == 0, res.output
-    assert "beam FE" in res.output
-    rows = (out / "errors_detailed.csv").read_text().splitlines()
-    assert rows[0] == "level,joints,point,direction,analytical_mm,fe_mm,rel_error_pct"
-    assert len(rows) == 1 + 2 * 2 * 3  # joints x points x directions
-    assert max(abs(float(r.split(",")[-1])) for r in rows[1:]) < 1e-6
+    assert "solid links" in res.output and "beam links" in res.output
+    for name, bound in (("errors_detailed.csv", 2.0), ("errors_simplified.csv", 2.0), ("errors_detailed_beam.csv", 1e-6)):
+        rows = (out / name).read_text().splitlines()
+        assert rows[0] == "level,joints,point,direction,analytical_mm,fe_mm,rel_error_pct"
+        assert len(rows) == 1 + 2 * 1 * 3  # joints x points x directions
+        errors = [abs(float(r.split(",")[-1])) for r in rows[1:]]
+        assert max(errors) < bound, (name, errors)
+        if "beam" not in name:
+            assert max(errors) > 1e-6   # the solid links are not the beam formula: a real difference shows
 
 
 def test_docs_quote_the_real_output():

@@ -42,8 +42,9 @@ def register(app: typer.Typer) -> None:
     ):
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
-        A parallel_device case (docs/parallel_device.md) is verified against the beam FE of its description:
-        errors_<level>.csv/.md in --out; --mesh, --jobs, --vtu, --joint-fe and the baselines do not apply.
+        A parallel_device case (docs/parallel_device.md) is verified against the FE of its description with solid
+        links (--mesh) and with beam links: errors_<level>[_beam].csv/.md in --out; --jobs, --vtu, --joint-fe and
+        the baselines do not apply.
 
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
         rel_error_pct (%); the detailed file compares the contact-joint FE with both idealizations, and
@@ -62,7 +63,8 @@ def register(app: typer.Typer) -> None:
         case = load_case_for(case_path, "verify", kinds=("haptic_6psu", "parallel_device"))
         if case.kind == "parallel_device":
             from femcheck.cli._parallel_device import verify
-            return verify(case, case_path, levels=LEVEL_CHOICES[level], points=points, out=out, force=force, check=check)
+            return verify(case, case_path, levels=LEVEL_CHOICES[level], points=points, out=out, force=force, check=check,
+                          mesh=mesh)
         pts = None
         if points:
             pts = [p.strip().upper() for p in points.split(",") if p.strip()]

@@ -2,9 +2,11 @@
 ``parallel_device`` case): the deflection along each load direction under the case's test force, for each
 model level and joint idealization, and their relative error.
 
-The beam FE (:mod:`femcheck.parallel.beam_fe`) uses the analytical element laws for the joints and the drive,
-so this checks the chain algebra and the link cantilevers, not the joint laws (a solid FE of the links and
-joint bodies is not written yet for this kind).
+Two FE routes from the same description (:mod:`femcheck.parallel.beam_fe`): ``parts="beam"`` meshes the links with
+beam elements, which reproduce the analytical cantilevers exactly, so analytical vs beam FE checks the chain
+algebra (carrying, releases, the platform sum) to round-off; ``parts="solid"`` meshes every link as a solid
+(:mod:`femcheck.parallel.solid_links`) and condenses it, which checks the link laws as well. Both use the
+analytical laws for the drives and the joint contacts (no contact FE of these joints is written for this kind).
 """
 from __future__ import annotations
 
@@ -46,8 +48,10 @@ class VerificationRows:
 
 
 def verify_device(case, labels=None, levels=("simplified", "detailed"), joints=("rigid", "released"),
-                  elements_per_link: int = 2) -> VerificationRows:
-    """Analytical vs beam-FE deflections of ``case`` at the test points ``labels`` (default P0..P8)."""
+                  elements_per_link: int = 2, parts: str = "beam", mesh: str = "default",
+                  progress=None) -> VerificationRows:
+    """Analytical vs FE deflections of ``case`` at the test points ``labels`` (default P0..P8); ``parts``
+    beam | solid, ``mesh`` the solid links' mesh level; ``progress(description)`` after each FE model."""
     labels = tuple(labels or POINT_LABELS)
     P = test_points(case)[[POINT_LABELS.index(p) for p in labels]]
     dev = case.device
@@ -60,7 +64,9 @@ def verify_device(case, labels=None, levels=("simplified", "detailed"), joints=(
                 W = np.concatenate([case.loads.test_N * u, np.zeros(3)])
                 r = evaluate(dev, P, W, model=level, joints=jt, state=state)
                 K_fe = device_fe_stiffness(dev, P, model=level, joints=jt, hertz_stiffness=r.hertz_stiffness,
-                                           state=state, elements_per_link=elements_per_link)
+                                           state=state, elements_per_link=elements_per_link, parts=parts, mesh=mesh)
+                if progress:
+                    progress(f"{parts} FE {level} {jt} {d}")
                 t_fe = np.linalg.solve(K_fe, np.broadcast_to(W, (len(P), 6))[..., None])[..., 0]
                 for k, label in enumerate(labels):
                     a, f = float(r.twist[k, :3] @ u) * 1e3, float(t_fe[k, :3] @ u) * 1e3
