@@ -489,50 +489,49 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
 
 # ---------------------------------------------------------------- the chain model
 @njit(cache=True, error_model="numpy")
-def _null_basis(tw, passive, nd, Nb, Q, Aw, v):
-    """Nb (6, m) orthonormal wrenches reciprocal to the passive twists (Householder complement); returns m."""
+def _null_basis(tw, passive, nd, Nb, Aw, Vr, vn):
+    """Nb (6, m) orthonormal wrenches reciprocal to the passive twists: Householder reflectors of the passive
+    twist matrix applied to the unit vectors e_k, k >= rank (workspaces Aw, Vr (6, 6), vn (6,)); returns m."""
     npv = 0
     for k in range(nd):
         if passive[k]:
             for i in range(6):
                 Aw[i, npv] = tw[k, i]
             npv += 1
-    for i in range(6):
-        for j in range(6):
-            Q[i, j] = 1.0 if i == j else 0.0
     for j in range(npv):
         nrm = 0.0
         for i in range(j, 6):
             nrm += Aw[i, j] * Aw[i, j]
         nrm = np.sqrt(nrm)
         for i in range(6):
-            v[i] = 0.0
+            Vr[j, i] = Aw[i, j] if i >= j else 0.0
+        Vr[j, j] += nrm if Aw[j, j] >= 0.0 else -nrm
+        v2 = 0.0
         for i in range(j, 6):
-            v[i] = Aw[i, j]
-        v[j] += nrm if Aw[j, j] >= 0.0 else -nrm
-        vn = 0.0
-        for i in range(j, 6):
-            vn += v[i] * v[i]
-        if vn == 0.0:
+            v2 += Vr[j, i] * Vr[j, i]
+        vn[j] = v2
+        if v2 == 0.0:
             continue
-        for c in range(j, npv):
+        for c in range(j + 1, npv):
             acc = 0.0
             for i in range(j, 6):
-                acc += v[i] * Aw[i, c]
-            f = 2.0 * acc / vn
+                acc += Vr[j, i] * Aw[i, c]
+            f = 2.0 * acc / v2
             for i in range(j, 6):
-                Aw[i, c] -= f * v[i]
-        for r in range(6):
-            acc = 0.0
-            for i in range(j, 6):
-                acc += Q[r, i] * v[i]
-            f = 2.0 * acc / vn
-            for i in range(j, 6):
-                Q[r, i] -= f * v[i]
+                Aw[i, c] -= f * Vr[j, i]
     m = 6 - npv
-    for i in range(6):
-        for c in range(m):
-            Nb[i, c] = Q[i, npv + c]
+    for c in range(m):
+        for i in range(6):
+            Nb[i, c] = 1.0 if i == npv + c else 0.0
+        for j in range(npv - 1, -1, -1):   # Q e = H_0 H_1 ... H_{npv-1} e
+            if vn[j] == 0.0:
+                continue
+            acc = 0.0
+            for i in range(j, 6):
+                acc += Vr[j, i] * Nb[i, c]
+            f = 2.0 * acc / vn[j]
+            for i in range(j, 6):
+                Nb[i, c] -= f * Vr[j, i]
     return m
 
 
@@ -542,12 +541,63 @@ def _hertz_k(F, Es, Rs):
 
 
 @njit(cache=True, error_model="numpy")
+def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
+    """Ae (m, m) = N^T S_C N of a cantilever link: N's wrenches carried to the link tip E (r = C - E) and into
+    the link frame R, then the sparse local tip compliance (femcheck.compliance.cantilever_beam)."""
+    E, G, A, Ix, Iy, Jt, kappa = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6]
+    lat = L / (kappa * G * A) if shear else 0.0
+    s00 = L ** 3 / (3.0 * E * Iy) + lat
+    s04 = L ** 2 / (2.0 * E * Iy)
+    s44 = L / (E * Iy)
+    s11 = L ** 3 / (3.0 * E * Ix) + lat
+    s13 = -(L ** 2) / (2.0 * E * Ix)
+    s33 = L / (E * Ix)
+    s22 = L / (E * A)
+    s55 = L / (G * Jt)
+    for a in range(m):
+        f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
+        m0 = Nb[3, a] + r[1] * f2 - r[2] * f1
+        m1 = Nb[4, a] + r[2] * f0 - r[0] * f2
+        m2 = Nb[5, a] + r[0] * f1 - r[1] * f0
+        for k in range(3):
+            V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
+            V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+    for a in range(m):
+        for b in range(a, m):
+            v = (s00 * V[a, 0] * V[b, 0] + s04 * (V[a, 0] * V[b, 4] + V[a, 4] * V[b, 0]) + s44 * V[a, 4] * V[b, 4]
+                 + s11 * V[a, 1] * V[b, 1] + s13 * (V[a, 1] * V[b, 3] + V[a, 3] * V[b, 1]) + s33 * V[a, 3] * V[b, 3]
+                 + s22 * V[a, 2] * V[b, 2] + s55 * V[a, 5] * V[b, 5])
+            Ae[a, b] = v
+            Ae[b, a] = v
+
+
+@njit(cache=True, error_model="numpy")
+def _sym_add(K, E, M, m, sign, xv):
+    """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
+    for i in range(6):
+        for a in range(m):
+            acc = 0.0
+            for b in range(m):
+                acc += E[i, b] * M[b, a]
+            xv[a] = acc
+        for j in range(i, 6):
+            acc = 0.0
+            for a in range(m):
+                acc += xv[a] * E[j, a]
+            K[i, j] += sign * acc
+
+
+@njit(cache=True, error_model="numpy")
 def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """Evaluate n poses. State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
     scale (n, L, E). Outputs K, S (n, 6, 6), t (n, 6), leg stiffness (n, L, 6, 6), leg wrench (n, L, 6),
     element energy (n, L, E), Hertz point stiffness (n, L, nhp), iterations (n,). Returns 0; 1 + p if the
-    fixed point of pose p did not converge; -1 - p if a leg or platform matrix of pose p is not positive definite."""
+    fixed point of pose p did not converge; -1 - p if a leg or platform matrix of pose p is not positive definite.
+
+    Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
+    ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
+    Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
     i_n, passive, lk_i, lk_p, hl_c, hl_link, hp, f_leg, kinds = (tab[0], tab[4], tab[7], tab[9], tab[10], tab[11],
                                                                  tab[12], tab[15], tab[17])
     L = i_n.shape[0]
@@ -555,114 +605,125 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     nl = lk_i.shape[1]
     n_slot = nl + 2
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
-    Se = np.zeros((L, n_slot, 6, 6))
+    Ae = np.zeros((L, n_slot, 6, 6))
     slot_kind = np.full((L, n_slot), -1, np.int64)
     n_slots = np.zeros(L, np.int64)
-    S0 = np.zeros((6, 6))
-    SL = np.zeros((6, 6))
-    St = np.zeros((6, 6))
-    W6 = np.zeros((6, 6))
+    V = np.zeros((6, 6))
     r3 = np.zeros(3)
     Nb = np.zeros((L, 6, 6))
     mm = np.zeros(L, np.int64)
     E = np.zeros((L, 6, 6))
-    A0 = np.zeros((L, 6, 6))
-    Mi = np.zeros((L, 6, 6))     # A0^-1 (Woodbury and fixed legs)
+    A0 = np.zeros((6, 6))
+    Mi = np.zeros((L, 6, 6))     # A0^-1
     X = np.zeros((L, 6, 3))      # M B
     A3 = np.zeros((L, 3, 3))     # B^T M B
     H = np.zeros((L, 6, 3))      # E X
+    P3 = np.zeros((L, 3, 6))     # N[:3] M E^T
+    Q3 = np.zeros((L, 3, 3))     # N[:3] X
     Y = np.zeros((L, 3, 3))
-    mode = np.zeros(L, np.int64)  # 0 no Hertz point: fixed; 1 direct m x m; 2 Woodbury
+    a1 = np.zeros(L)             # m = 1: A0, |N[:3]|^2, current leg stiffness
+    b1 = np.zeros(L)
+    k1 = np.zeros(L)
+    mode = np.zeros(L, np.int64)
     c_hp = np.zeros(L)
     kh = np.zeros((L, hp.shape[1]))
-    Ac = np.zeros((6, 6))
     Ai = np.zeros((6, 6))
     Lf = np.zeros((6, 6))
     ev = np.zeros(6)
     xv = np.zeros(6)
+    xi = np.zeros(6)
     K0 = np.zeros((6, 6))
     K = np.zeros((6, 6))
     t = np.zeros(6)
     z = np.zeros(6)
-    yv = np.zeros(6)
+    yv = np.zeros((L, 6))
     WC = np.zeros((L, 6))
     Z3 = np.zeros((3, 3))
-    Qw = np.zeros((6, 6))
     Aw = np.zeros((6, 6))
-    vw = np.zeros(6)
+    Vr = np.zeros((6, 6))
+    vn = np.zeros(6)
     Ht = np.zeros(3)
     YHt = np.zeros(3)
     HY = np.zeros((6, 3))
+    ik_kind = i_n[:, 7]
     for p in range(n):
-        K0[:, :] = 0.0
+        for i in range(6):
+            for j in range(6):
+                K0[i, j] = 0.0
         any_hp = False
         for l in range(L):
-            # ---- element compliances carried to C_l
-            ns = 0
-            for m in range(i_n[l, 2]):
-                kind = lk_i[l, m, 3]
-                if kind < 0:
-                    continue
-                pr = lk_p[l, m]
-                _cantilever(llen[l, p, m], pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], shear, SL)
-                _rotate(lR[l, p, m], SL, St, W6)
-                en = lk_i[l, m, 1]
-                for i in range(3):
-                    r3[i] = C[l, p, i] - cen[l, p, en, i]
-                _shift_compliance(r3, St, Se[l, ns], W6)
-                f = scale[p, l, kind]
-                for i in range(6):
-                    for j in range(6):
-                        Se[l, ns, i, j] *= f
-                slot_kind[l, ns] = kind
-                ns += 1
-            if detailed:
-                xi = tw[l, p, i_n[l, 6]]
-                c = f_leg[l, 0] * scale[p, l, k_drive]
-                for i in range(6):
-                    for j in range(6):
-                        Se[l, ns, i, j] = c * xi[i] * xi[j]
-                slot_kind[l, ns] = k_drive
-                ns += 1
-                if i_n[l, 3] > 0:
-                    f = scale[p, l, k_hl]
-                    Se[l, ns, :, :] = 0.0
-                    for j in range(i_n[l, 3]):
-                        R = lR[l, p, hl_link[l, j]]
-                        c0, c2 = hl_c[l, j, 0], hl_c[l, j, 0] + hl_c[l, j, 1]
-                        for a in range(3):
-                            for b in range(3):
-                                Se[l, ns, a, b] += f * (c0 * (R[a, 0] * R[b, 0] + R[a, 1] * R[b, 1]) + c2 * R[a, 2] * R[b, 2])
-                    slot_kind[l, ns] = k_hl
-                    ns += 1
-            n_slots[l] = ns
-            for i in range(6):
-                for j in range(6):
-                    acc = 0.0
-                    for s in range(ns):
-                        acc += Se[l, s, i, j]
-                    S0[i, j] = acc
-            # ---- wrench basis N, A0 = N^T S0 N, E = G^T N
-            if released:
-                m = _null_basis(tw[l, p], passive[l], i_n[l, 0], Nb[l], Qw, Aw, vw)
-            else:
+            # ---- wrench basis N (6, m)
+            if not released:
                 m = 6
                 for i in range(6):
                     for j in range(6):
                         Nb[l, i, j] = 1.0 if i == j else 0.0
+            elif ik_kind[l] > 0:
+                # F-P-S-U / U-P-S: the one wrench is the force along the line of the S and U centres (through C)
+                o = 1 if ik_kind[l] == 1 else 0
+                d0 = C[l, p, 0] - cen[l, p, o, 0]
+                d1 = C[l, p, 1] - cen[l, p, o, 1]
+                d2 = C[l, p, 2] - cen[l, p, o, 2]
+                dn = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                m = 1
+                Nb[l, 0, 0], Nb[l, 1, 0], Nb[l, 2, 0] = d0 / dn, d1 / dn, d2 / dn
+                Nb[l, 3, 0] = Nb[l, 4, 0] = Nb[l, 5, 0] = 0.0
+            else:
+                m = _null_basis(tw[l, p], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
             mm[l] = m
-            for a in range(m):
-                for i in range(6):
-                    acc = 0.0
-                    for j in range(6):
-                        acc += S0[i, j] * Nb[l, j, a]
-                    xv[i] = acc
-                for b in range(a, m):
+            # ---- A_e = N^T S_e N of every element (compliances carried to C_l)
+            ns = 0
+            for k in range(i_n[l, 2]):
+                kind = lk_i[l, k, 3]
+                if kind < 0:
+                    continue
+                en = lk_i[l, k, 1]
+                for i in range(3):
+                    r3[i] = C[l, p, i] - cen[l, p, en, i]
+                _link_form(llen[l, p, k], lk_p[l, k], shear, lR[l, p, k], r3, Nb[l], m, Ae[l, ns], V)
+                f = scale[p, l, kind]
+                for a in range(m):
+                    for b in range(m):
+                        Ae[l, ns, a, b] *= f
+                slot_kind[l, ns] = kind
+                ns += 1
+            if detailed:
+                c = f_leg[l, 0] * scale[p, l, k_drive]
+                x = tw[l, p, i_n[l, 6]]
+                for a in range(m):
                     acc = 0.0
                     for i in range(6):
-                        acc += Nb[l, i, b] * xv[i]
-                    A0[l, a, b] = acc
-                    A0[l, b, a] = acc
+                        acc += Nb[l, i, a] * x[i]
+                    xi[a] = acc
+                for a in range(m):
+                    for b in range(m):
+                        Ae[l, ns, a, b] = c * xi[a] * xi[b]
+                slot_kind[l, ns] = k_drive
+                ns += 1
+                if i_n[l, 3] > 0:
+                    f = scale[p, l, k_hl]
+                    for a in range(m):
+                        for b in range(m):
+                            Ae[l, ns, a, b] = 0.0
+                    for j in range(i_n[l, 3]):
+                        R = lR[l, p, hl_link[l, j]]
+                        for k in range(3):
+                            ck = f * (hl_c[l, j, 0] + (hl_c[l, j, 1] if k == 2 else 0.0))
+                            for a in range(m):
+                                xi[a] = R[0, k] * Nb[l, 0, a] + R[1, k] * Nb[l, 1, a] + R[2, k] * Nb[l, 2, a]
+                            for a in range(m):
+                                for b in range(m):
+                                    Ae[l, ns, a, b] += ck * xi[a] * xi[b]
+                    slot_kind[l, ns] = k_hl
+                    ns += 1
+            n_slots[l] = ns
+            for a in range(m):
+                for b in range(m):
+                    acc = 0.0
+                    for s in range(ns):
+                        acc += Ae[l, s, a, b]
+                    A0[a, b] = acc
+            # ---- E = G^T N (wrenches at the TCP)
             for i in range(3):
                 r3[i] = C[l, p, i] - tcp[p, i]
             for a in range(m):
@@ -672,32 +733,23 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 E[l, 4, a] = r3[2] * f0 - r3[0] * f2 + Nb[l, 4, a]
                 E[l, 5, a] = r3[0] * f1 - r3[1] * f0 + Nb[l, 5, a]
             nhp = i_n[l, 4] if detailed else 0
-            for j in range(nhp):
-                kh[l, j] = _hertz_k(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
             c_hp[l] = 0.0
             for j in range(nhp):
+                kh[l, j] = _hertz_k(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
                 c_hp[l] += scale[p, l, k_hp] / kh[l, j]
-            if nhp > 0 and m <= 2:
-                mode[l] = 1
+            if nhp > 0:
                 any_hp = True
+            if nhp > 0 and m == 1:
+                mode[l] = 1
+                a1[l] = A0[0, 0]
+                b1[l] = Nb[l, 0, 0] ** 2 + Nb[l, 1, 0] ** 2 + Nb[l, 2, 0] ** 2
                 continue
             mode[l] = 2 if nhp > 0 else 0
-            any_hp = any_hp or nhp > 0
-            if not _chol(A0[l], Lf, m):
+            if not _chol(A0, Lf, m):
                 return -1 - p
             _chol_inverse(Lf, Mi[l], ev, xv, m)
-            for i in range(6):                     # K0 += E M E^T (upper triangle)
-                for a in range(m):
-                    acc = 0.0
-                    for b in range(m):
-                        acc += E[l, i, b] * Mi[l, b, a]
-                    xv[a] = acc
-                for j in range(i, 6):
-                    acc = 0.0
-                    for a in range(m):
-                        acc += xv[a] * E[l, j, a]
-                    K0[i, j] += acc
-            if mode[l] == 2:                       # B = N[:3]^T (m, 3): X = M B, A3 = B^T X, H = E X
+            _sym_add(K0, E[l], Mi[l], m, 1.0, xv)
+            if mode[l] == 2:
                 for a in range(m):
                     for k in range(3):
                         acc = 0.0
@@ -710,12 +762,17 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                         for a in range(m):
                             acc += Nb[l, k, a] * X[l, a, k2]
                         A3[l, k, k2] = acc
+                        Q3[l, k, k2] = acc
                 for i in range(6):
                     for k in range(3):
                         acc = 0.0
                         for a in range(m):
                             acc += E[l, i, a] * X[l, a, k]
                         H[l, i, k] = acc
+                # P3 = N[:3] M E^T = X^T E^T (M symmetric)
+                for k in range(3):
+                    for i in range(6):
+                        P3[l, k, i] = H[l, i, k]
         # ---- Hertz fixed point
         it = 0
         while True:
@@ -723,26 +780,11 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 for j in range(i, 6):
                     K[i, j] = K0[i, j]
             for l in range(L):
-                m = mm[l]
                 if mode[l] == 1:
-                    for a in range(m):
-                        for b in range(m):
-                            Ac[a, b] = A0[l, a, b] + c_hp[l] * (Nb[l, 0, a] * Nb[l, 0, b] + Nb[l, 1, a] * Nb[l, 1, b]
-                                                                + Nb[l, 2, a] * Nb[l, 2, b])
-                    if not _chol(Ac, Lf, m):
-                        return -1 - p
-                    _chol_inverse(Lf, Mi[l], ev, xv, m)
+                    k1[l] = 1.0 / (a1[l] + c_hp[l] * b1[l])
                     for i in range(6):
-                        for a in range(m):
-                            acc = 0.0
-                            for b in range(m):
-                                acc += E[l, i, b] * Mi[l, b, a]
-                            xv[a] = acc
                         for j in range(i, 6):
-                            acc = 0.0
-                            for a in range(m):
-                                acc += xv[a] * E[l, j, a]
-                            K[i, j] += acc
+                            K[i, j] += k1[l] * E[l, i, 0] * E[l, j, 0]
                 elif mode[l] == 2:
                     c = c_hp[l]
                     for i in range(3):
@@ -766,41 +808,29 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             if not _chol(K, Lf, 6):
                 return -1 - p
             _chol_solve(Lf, wrench[p], t, 6)
-            # leg wrenches W_C = N A_c^-1 E^T t
-            for l in range(L):
-                m = mm[l]
-                for a in range(m):
-                    acc = 0.0
-                    for i in range(6):
-                        acc += E[l, i, a] * t[i]
-                    z[a] = acc
-                if mode[l] == 2:
-                    for k in range(3):
-                        acc = 0.0
-                        for a in range(m):
-                            acc += X[l, a, k] * z[a]
-                        Ht[k] = acc
-                    for k in range(3):
-                        YHt[k] = Y[l, k, 0] * Ht[0] + Y[l, k, 1] * Ht[1] + Y[l, k, 2] * Ht[2]
-                for a in range(m):
-                    acc = 0.0
-                    for b in range(m):
-                        acc += Mi[l, a, b] * z[b]
-                    if mode[l] == 2:
-                        acc -= X[l, a, 0] * YHt[0] + X[l, a, 1] * YHt[1] + X[l, a, 2] * YHt[2]
-                    yv[a] = acc
-                for i in range(6):
-                    acc = 0.0
-                    for a in range(m):
-                        acc += Nb[l, i, a] * yv[a]
-                    WC[l, i] = acc
             if not any_hp:
                 break
+            # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
             change = 0.0
             for l in range(L):
                 if mode[l] == 0:
                     continue
-                F = np.sqrt(WC[l, 0] ** 2 + WC[l, 1] ** 2 + WC[l, 2] ** 2)
+                if mode[l] == 1:
+                    acc = 0.0
+                    for i in range(6):
+                        acc += E[l, i, 0] * t[i]
+                    F = abs(k1[l] * acc) * np.sqrt(b1[l])
+                else:
+                    for k in range(3):
+                        Ht[k] = H[l, 0, k] * t[0] + H[l, 1, k] * t[1] + H[l, 2, k] * t[2] + H[l, 3, k] * t[3] \
+                            + H[l, 4, k] * t[4] + H[l, 5, k] * t[5]
+                    for k in range(3):
+                        YHt[k] = Y[l, k, 0] * Ht[0] + Y[l, k, 1] * Ht[1] + Y[l, k, 2] * Ht[2]
+                    F2 = 0.0
+                    for k in range(3):
+                        fk = Ht[k] - (Q3[l, k, 0] * YHt[0] + Q3[l, k, 1] * YHt[1] + Q3[l, k, 2] * YHt[2])
+                        F2 += fk * fk
+                    F = np.sqrt(F2)
                 c_hp[l] = 0.0
                 for j in range(i_n[l, 4]):
                     k_new = _hertz_k(max(F, hp[l, j, 2]), hp[l, j, 0], hp[l, j, 1])
@@ -825,41 +855,62 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             m = mm[l]
             for j in range(i_n[l, 4] if detailed else 0):
                 kh_out[p, l, j] = kh[l, j]
-            # leg stiffness N A_c^-1 N^T (A_c with the Hertz compliance the wrenches were computed at)
+            # y = A_c^-1 E^T t (W_C = N y) and A_c^-1 (the leg stiffness N A_c^-1 N^T)
             for a in range(m):
-                for b in range(m):
-                    Ai[a, b] = Mi[l, a, b]
-            if mode[l] == 2:
+                acc = 0.0
+                for i in range(6):
+                    acc += E[l, i, a] * t[i]
+                z[a] = acc
+            if mode[l] == 1:
+                Ai[0, 0] = k1[l]
+            else:
                 for a in range(m):
                     for b in range(m):
-                        Ai[a, b] -= (X[l, a, 0] * (Y[l, 0, 0] * X[l, b, 0] + Y[l, 0, 1] * X[l, b, 1] + Y[l, 0, 2] * X[l, b, 2])
-                                     + X[l, a, 1] * (Y[l, 1, 0] * X[l, b, 0] + Y[l, 1, 1] * X[l, b, 1] + Y[l, 1, 2] * X[l, b, 2])
-                                     + X[l, a, 2] * (Y[l, 2, 0] * X[l, b, 0] + Y[l, 2, 1] * X[l, b, 1] + Y[l, 2, 2] * X[l, b, 2]))
-            for i in range(6):
-                for a in range(m):
-                    acc = 0.0
-                    for b in range(m):
-                        acc += Nb[l, i, b] * Ai[b, a]
-                    xv[a] = acc
-                for j in range(i, 6):
-                    acc = 0.0
+                        Ai[a, b] = Mi[l, a, b]
+                if mode[l] == 2:
                     for a in range(m):
-                        acc += xv[a] * Nb[l, j, a]
-                    KL_out[p, l, i, j] = acc
-                    KL_out[p, l, j, i] = acc
+                        for k in range(3):
+                            xv[k] = Y[l, k, 0] * X[l, a, 0] + Y[l, k, 1] * X[l, a, 1] + Y[l, k, 2] * X[l, a, 2]
+                        for b in range(m):
+                            Ai[a, b] -= X[l, b, 0] * xv[0] + X[l, b, 1] * xv[1] + X[l, b, 2] * xv[2]
+            for a in range(m):
+                acc = 0.0
+                for b in range(m):
+                    acc += Ai[a, b] * z[b]
+                yv[l, a] = acc
             for i in range(6):
-                WC_out[p, l, i] = WC[l, i]
-            # complementary energy W_C^T S_e W_C per element kind
+                acc = 0.0
+                for a in range(m):
+                    acc += Nb[l, i, a] * yv[l, a]
+                WC_out[p, l, i] = acc
+            if released:
+                for i in range(6):
+                    for a in range(m):
+                        acc = 0.0
+                        for b in range(m):
+                            acc += Nb[l, i, b] * Ai[b, a]
+                        xv[a] = acc
+                    for j in range(i, 6):
+                        acc = 0.0
+                        for a in range(m):
+                            acc += xv[a] * Nb[l, j, a]
+                        KL_out[p, l, i, j] = acc
+                        KL_out[p, l, j, i] = acc
+            else:
+                for i in range(6):
+                    for j in range(6):
+                        KL_out[p, l, i, j] = Ai[i, j]
+            # complementary energy y^T A_e y per element kind (W_C^T S_e W_C)
             for k in range(energy_out.shape[2]):
                 energy_out[p, l, k] = 0.0
             for s in range(n_slots[l]):
                 acc = 0.0
-                for i in range(6):
-                    for j in range(6):
-                        acc += WC[l, i] * Se[l, s, i, j] * WC[l, j]
+                for a in range(m):
+                    for b in range(m):
+                        acc += yv[l, a] * Ae[l, s, a, b] * yv[l, b]
                 energy_out[p, l, slot_kind[l, s]] += acc
             if detailed and i_n[l, 4] > 0:
-                F2 = WC[l, 0] ** 2 + WC[l, 1] ** 2 + WC[l, 2] ** 2
+                F2 = WC_out[p, l, 0] ** 2 + WC_out[p, l, 1] ** 2 + WC_out[p, l, 2] ** 2
                 for j in range(i_n[l, 4]):
                     energy_out[p, l, k_hp] += F2 * scale[p, l, k_hp] / kh[l, j]
     return 0
