@@ -270,14 +270,58 @@ def _cardan(daxis_s, Rs, q, k0, A, T):
 
 
 @njit(cache=True, error_model="numpy")
-def _closed_form(l, tab, R_t, C_t, q, R_home, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3):
-    """Joint values q of leg l by its closed form (ik_kind 1 or 2); False where it has no real solution."""
-    i_n, daxis, cen, f_leg = tab[0], tab[2], tab[5], tab[15]
-    kind = i_n[l, 7]
-    # R_nd = R_t R_home^T: the rotation the leg's freedoms must produce
+def _set_transform(Rp, tp, k, R, c_from, c_to):
+    """Prefix k: x -> R (x - c_from) + c_to, i.e. Rp[k] = R, tp[k] = c_to - R c_from."""
     for i in range(3):
         for j in range(3):
+            Rp[k, i, j] = R[i, j]
+        tp[k, i] = c_to[i] - (R[i, 0] * c_from[0] + R[i, 1] * c_from[1] + R[i, 2] * c_from[2])
+
+
+@njit(cache=True, error_model="numpy")
+def _set_twist(tw, k, R, a, C, c, revolute):
+    """tw[k] = [w x (C - c); w] (revolute) or [w; 0] (slide), w = R a."""
+    w0 = R[0, 0] * a[0] + R[0, 1] * a[1] + R[0, 2] * a[2]
+    w1 = R[1, 0] * a[0] + R[1, 1] * a[1] + R[1, 2] * a[2]
+    w2 = R[2, 0] * a[0] + R[2, 1] * a[1] + R[2, 2] * a[2]
+    if revolute:
+        r0, r1, r2 = C[0] - c[0], C[1] - c[1], C[2] - c[2]
+        tw[k, 0] = w1 * r2 - w2 * r1
+        tw[k, 1] = w2 * r0 - w0 * r2
+        tw[k, 2] = w0 * r1 - w1 * r0
+        tw[k, 3], tw[k, 4], tw[k, 5] = w0, w1, w2
+    else:
+        tw[k, 0], tw[k, 1], tw[k, 2] = w0, w1, w2
+        tw[k, 3] = tw[k, 4] = tw[k, 5] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _s_axes(R, A, T, q1, out):
+    """The S joint's three axes at the pose, R (rotation before the joint) times A e1, A Rx(q1) e2,
+    A Rx(q1) Ry(q2) e3 (the last is A T[:, 2]); out (3, 3) rows."""
+    c1, s1 = np.cos(q1), np.sin(q1)
+    for i in range(3):
+        v0 = A[i, 0]
+        v1 = A[i, 1] * c1 + A[i, 2] * s1
+        v2 = A[i, 0] * T[0, 2] + A[i, 1] * T[1, 2] + A[i, 2] * T[2, 2]
+        out[0, i], out[1, i], out[2, i] = v0, v1, v2
+    for k in range(3):
+        x0, x1, x2 = out[k, 0], out[k, 1], out[k, 2]
+        for i in range(3):
+            out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
+
+
+@njit(cache=True, error_model="numpy")
+def _closed_form(l, tab, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
+    """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
+    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
+    i_n, daxis, cen, f_leg = tab[0], tab[2], tab[5], tab[15]
+    kind = i_n[l, 7]
+    for i in range(3):
+        for j in range(3):
+            # R_nd = R_t R_home^T: the rotation the leg's freedoms must produce
             Rn[i, j] = R_t[i, 0] * R_home[j, 0] + R_t[i, 1] * R_home[j, 1] + R_t[i, 2] * R_home[j, 2]
+            I3[i, j] = 1.0 if i == j else 0.0
     if kind == 1:   # F-P*-S-U: dofs [P, S1, S2, S3, U1, U2]
         u = daxis[l, 0]
         cS, cU = cen[l, 1], cen[l, 2]
@@ -305,6 +349,20 @@ def _closed_form(l, tab, R_t, C_t, q, R_home, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A
         _mm3(Rn, Ra, T3)
         _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
         _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
+        for i in range(3):
+            v3[i] = cS[i] + u[i] * q[0]                          # B
+        _set_transform(Rp, tp, 0, I3, cS, cS)
+        _set_transform(Rp, tp, 1, I3, cS, v3)
+        _set_transform(Rp, tp, 4, Rs, cS, v3)
+        for i in range(3):
+            C[i] = Rs[i, 0] * z3[0] + Rs[i, 1] * z3[1] + Rs[i, 2] * z3[2] + v3[i]
+        _set_transform(Rp, tp, 6, Rn, cU, C)
+        _set_twist(tw, 0, I3, u, C, C, False)
+        _s_axes(I3, A3, T3, q[1], Sx)
+        for k in range(3):
+            _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
+        _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
+        _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
         return True
     # U-P*-S: dofs [U1, U2, P, S1, S2, S3]
     u = daxis[l, 2]
@@ -328,11 +386,32 @@ def _closed_form(l, tab, R_t, C_t, q, R_home, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A
     q[0], q[1] = ang[0], ang[1]
     _rodrigues(daxis[l, 0], ang[0], Ra)
     _rodrigues(daxis[l, 1], ang[1], Rb)
-    _mm3(Ra, Rb, T3)                                             # R_U
+    _mm3(Ra, Rb, Sx)                                             # R_U
     for i in range(3):
         for j in range(3):
-            Rs[i, j] = T3[0, i] * Rn[0, j] + T3[1, i] * Rn[1, j] + T3[2, i] * Rn[2, j]   # R_U^T R_nd
+            Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_S = R_U^T R_nd
     _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
+    for i in range(3):
+        for j in range(3):
+            Rb[i, j] = Sx[i, j]                                  # keep R_U
+    for i in range(3):
+        v3[i] = cS[i] + u[i] * q[2]                              # the S centre before the U turns it
+    _set_transform(Rp, tp, 0, I3, cU, cU)
+    _set_transform(Rp, tp, 2, Rb, cU, cU)
+    for i in range(3):
+        w3[i] = v3[i] - cU[i]
+    for i in range(3):
+        C[i] = Rb[i, 0] * w3[0] + Rb[i, 1] * w3[1] + Rb[i, 2] * w3[2] + cU[i]
+    for i in range(3):
+        w3[i] = cU[i] - u[i] * q[2]
+    _set_transform(Rp, tp, 3, Rb, w3, cU)                        # after the slide: R_U (x + u q - c_U) + c_U
+    _set_transform(Rp, tp, 6, Rn, cS, C)
+    _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
+    _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
+    _set_twist(tw, 2, Rb, u, C, C, False)
+    _s_axes(Rb, A3, T3, q[3], Sx)
+    for k in range(3):
+        _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
     return True
 
 
@@ -365,8 +444,8 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     y = np.zeros(6)
     q = np.zeros(ndm)
     w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(2)
-    Rn, Ra, Rb, Rs, A3, T3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
-                              np.zeros((3, 3)), np.zeros((3, 3)))
+    Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
+                                      np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
     for l in range(L):
         nd = i_n[l, 0]
         for p in range(n):
@@ -374,9 +453,9 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 q[k] = 0.0
             closed = False
             if i_n[l, 7] > 0 and not numeric_only:
-                closed = _closed_form(l, tab, R_t[p], C_t[l, p], q, R_home, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3)
+                closed = _closed_form(l, tab, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
+                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
                 if closed:
-                    _forward(l, q, tab, Rp, tp, Rk, tk)
                     res = _end_error(l, tab, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
                     closed = res < TOL
                 if not closed:
@@ -452,7 +531,8 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 q_out[l, p, k] = q[k]
             for i in range(3):
                 C_out[l, p, i] = C[i]
-            _twists(l, tab, Rp, tp, C, tw)
+            if not closed:
+                _twists(l, tab, Rp, tp, C, tw)
             for k in range(nd):
                 for i in range(6):
                     tw_out[l, p, k, i] = tw[k, i]
