@@ -256,14 +256,13 @@ def _cardan(daxis_s, Rs, q, k0, A, T):
     for i in range(3):
         for j in range(3):
             A[i, j] = daxis_s[j, i]       # columns s1, s2, s3
-    # T = A^T Rs A = Rx(q1) Ry(q2) Rz(q3)
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for a in range(3):
-                for b in range(3):
-                    acc += A[a, i] * Rs[a, b] * A[b, j]
-            T[i, j] = acc
+    # T = A^T Rs A = Rx(q1) Ry(q2) Rz(q3); only T[0, :2] and T[:, 2] are needed
+    for j in range(3):
+        x0 = Rs[0, 0] * A[0, j] + Rs[0, 1] * A[1, j] + Rs[0, 2] * A[2, j]
+        x1 = Rs[1, 0] * A[0, j] + Rs[1, 1] * A[1, j] + Rs[1, 2] * A[2, j]
+        x2 = Rs[2, 0] * A[0, j] + Rs[2, 1] * A[1, j] + Rs[2, 2] * A[2, j]
+        for i in range(3):
+            T[i, j] = A[0, i] * x0 + A[1, i] * x1 + A[2, i] * x2
     q[k0 + 1] = np.arcsin(min(1.0, max(-1.0, T[0, 2])))
     q[k0] = np.arctan2(-T[1, 2], T[2, 2])
     q[k0 + 2] = np.arctan2(-T[0, 1], T[0, 0])
@@ -456,7 +455,8 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 closed = _closed_form(l, tab, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
                                       Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
                 if closed:
-                    res = _end_error(l, tab, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
+                    # the orientation holds by construction (R_nd is the product); check the position
+                    res = np.sqrt((C_t[l, p, 0] - C[0]) ** 2 + (C_t[l, p, 1] - C[1]) ** 2 + (C_t[l, p, 2] - C[2]) ** 2)
                     closed = res < TOL
                 if not closed:
                     for k in range(ndm):
