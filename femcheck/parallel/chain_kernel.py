@@ -89,7 +89,12 @@ def _chol_inverse(Lf, out, e, x, m):
 
 @njit(cache=True, error_model="numpy")
 def _rodrigues(w, q, R):
-    c, s = np.cos(q), np.sin(q)
+    _rodrigues_cs(w, np.cos(q), np.sin(q), R)
+
+
+@njit(cache=True, error_model="numpy")
+def _rodrigues_cs(w, c, s, R):
+    """R = Rot(w, q) from c = cos q, s = sin q (unit axis w)."""
     v = 1.0 - c
     R[0, 0] = c + w[0] * w[0] * v
     R[0, 1] = w[0] * w[1] * v - w[2] * s
@@ -203,20 +208,27 @@ def _twists(l, tab, Rp, tp, C, tw):
 
 # ---------------------------------------------------------------- closed forms
 @njit(cache=True, error_model="numpy")
-def _sp1(w, p, z):
-    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w."""
+def _sp1(w, p, z, cs, k):
+    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2])."""
     wp = w[0] * p[0] + w[1] * p[1] + w[2] * p[2]
     wz = w[0] * z[0] + w[1] * z[1] + w[2] * z[2]
     p0, p1, p2 = p[0] - w[0] * wp, p[1] - w[1] * wp, p[2] - w[2] * wp
     z0, z1, z2 = z[0] - w[0] * wz, z[1] - w[1] * wz, z[2] - w[2] * wz
     cx, cy, cz = p1 * z2 - p2 * z1, p2 * z0 - p0 * z2, p0 * z1 - p1 * z0
-    return np.arctan2(w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2)
+    y, x = w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2
+    r = np.sqrt(x * x + y * y)
+    if r > 0.0:
+        cs[k], cs[k + 1] = x / r, y / r
+    else:
+        cs[k], cs[k + 1] = 1.0, 0.0
+    return np.arctan2(y, x)
 
 
 @njit(cache=True, error_model="numpy")
 def _sp2(w1, w2, p, qv, z, out):
     """Paden-Kahan subproblem 2: Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point), the solution whose
-    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2); False if none is real."""
+    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2);
+    False if none is real."""
     c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
     den = 1.0 - c12 * c12
     if den < 1e-12:
@@ -245,8 +257,8 @@ def _sp2(w1, w2, p, qv, z, out):
             best = d
             for i in range(3):
                 z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-    out[1] = _sp1(w2, p, z)
-    out[0] = _sp1(w1, z, qv)
+    out[1] = _sp1(w2, p, z, out, 4)
+    out[0] = _sp1(w1, z, qv, out, 2)
     return True
 
 
@@ -297,8 +309,12 @@ def _set_twist(tw, k, R, a, C, c, revolute):
 @njit(cache=True, error_model="numpy")
 def _s_axes(R, A, T, q1, out):
     """The S joint's three axes at the pose, R (rotation before the joint) times A e1, A Rx(q1) e2,
-    A Rx(q1) Ry(q2) e3 (the last is A T[:, 2]); out (3, 3) rows."""
-    c1, s1 = np.cos(q1), np.sin(q1)
+    A Rx(q1) Ry(q2) e3 (the last is A T[:, 2]); out (3, 3) rows. cos q1, sin q1 from T[:, 2] = [s2, -s1 c2, c1 c2]."""
+    c2 = np.sqrt(T[1, 2] * T[1, 2] + T[2, 2] * T[2, 2])
+    if c2 > 1e-9:
+        c1, s1 = T[2, 2] / c2, -T[1, 2] / c2
+    else:
+        c1, s1 = np.cos(q1), np.sin(q1)
     for i in range(3):
         v0 = A[i, 0]
         v1 = A[i, 1] * c1 + A[i, 2] * s1
@@ -343,8 +359,8 @@ def _closed_form(l, tab, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn
         if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang):
             return False
         q[5], q[4] = -ang[0], -ang[1]
-        _rodrigues(daxis[l, 5], ang[0], Ra)
-        _rodrigues(daxis[l, 4], ang[1], Rb)
+        _rodrigues_cs(daxis[l, 5], ang[2], ang[3], Ra)
+        _rodrigues_cs(daxis[l, 4], ang[4], ang[5], Rb)
         _mm3(Rn, Ra, T3)
         _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
         _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
@@ -383,8 +399,8 @@ def _closed_form(l, tab, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn
     if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang):
         return False
     q[0], q[1] = ang[0], ang[1]
-    _rodrigues(daxis[l, 0], ang[0], Ra)
-    _rodrigues(daxis[l, 1], ang[1], Rb)
+    _rodrigues_cs(daxis[l, 0], ang[2], ang[3], Ra)
+    _rodrigues_cs(daxis[l, 1], ang[4], ang[5], Rb)
     _mm3(Ra, Rb, Sx)                                             # R_U
     for i in range(3):
         for j in range(3):
@@ -442,7 +458,7 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     rhs = np.zeros(6)
     y = np.zeros(6)
     q = np.zeros(ndm)
-    w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(2)
+    w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(6)
     Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
     for l in range(L):

@@ -35,15 +35,16 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     C_t = np.ascontiguousarray((origin[None, :, :] + np.einsum("nij,lj->lni", R, b)))
     i_n = tb.tab[0]
     nd, nc, nl = tb.tab[1].shape[1], tb.tab[5].shape[1], tb.tab[7].shape[1]
-    q = np.zeros((L, n, nd))
+    # every entry a leg has is written by the kernel; the padding of shorter legs is never read
+    q = np.empty((L, n, nd))
     res = np.empty((L, n))
     ok = np.empty((L, n), dtype=np.bool_)
     closed = np.empty((L, n), dtype=np.bool_)
     C = np.empty((L, n, 3))
-    cen = np.zeros((L, n, nc, 3))
-    tw = np.zeros((L, n, nd, 6))
-    lR = np.zeros((L, n, nl, 3, 3))
-    llen = np.ones((L, n, nl))
+    cen = np.empty((L, n, nc, 3))
+    tw = np.empty((L, n, nd, 6))
+    lR = np.empty((L, n, nl, 3, 3))
+    llen = np.empty((L, n, nl))
     kern.ik_kernel(tb.tab, np.ascontiguousarray(R), C_t, bool(numeric_only), q, res, ok, closed, C, cen, tw, lR, llen)
     legs = []
     for l in range(L):
@@ -90,7 +91,7 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
     t = np.empty((n, 6))
     KL = np.empty((n, L, 6, 6))
     WC = np.empty((n, L, 6))
-    energy = np.zeros((n, L, tb.n_elem))
+    energy = np.empty((n, L, tb.n_elem))
     kh = np.full((n, L, tb.hp_joint.shape[1]), np.nan)
     iters = np.zeros(n, dtype=np.int64)
     status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
