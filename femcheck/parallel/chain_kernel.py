@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from femcheck.chain.haptic_6psu_kernel import _cantilever, _rotate, _shift_compliance
+from femcheck.chain.haptic_6psu_kernel import _inverse3
 
 #: the numeric IK's constants (as :mod:`femcheck.parallel.leg_kinematics`)
 MAX_ITER = 60
@@ -138,9 +138,8 @@ def _rotvec(R, out):
 
 # ---------------------------------------------------------------- forward pass of one leg
 @njit(cache=True, error_model="numpy")
-def _forward(l, q, tab, Rp, tp, Rk, tk):
+def _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk):
     """Prefix transforms Rp (nd+1, 3, 3), tp (nd+1, 3) of the freedoms of leg l at joint values q."""
-    i_n, dkind, daxis, dpoint = tab[0], tab[1], tab[2], tab[3]
     nd = i_n[l, 0]
     for i in range(3):
         for j in range(3):
@@ -165,9 +164,8 @@ def _forward(l, q, tab, Rp, tp, Rk, tk):
 
 
 @njit(cache=True, error_model="numpy")
-def _end_error(l, tab, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
+def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
     """C (3,) the leg's attachment, e (6,) [C_t - C; rotvec(R_t (R_nd R_home)^T)]; returns |e|."""
-    i_n, cen = tab[0], tab[5]
     nd = i_n[l, 0]
     cl = cen[l, i_n[l, 1] - 1]
     for i in range(3):
@@ -185,9 +183,8 @@ def _end_error(l, tab, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
 
 
 @njit(cache=True, error_model="numpy")
-def _twists(l, tab, Rp, tp, C, tw):
+def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw):
     """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0]."""
-    i_n, dkind, daxis, dpoint = tab[0], tab[1], tab[2], tab[3]
     for k in range(i_n[l, 0]):
         a, c0 = daxis[l, k], dpoint[l, k]
         w0 = Rp[k, 0, 0] * a[0] + Rp[k, 0, 1] * a[1] + Rp[k, 0, 2] * a[2]
@@ -327,10 +324,9 @@ def _s_axes(R, A, T, q1, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _closed_form(l, tab, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
+def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
     """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
     boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
-    i_n, daxis, cen, f_leg = tab[0], tab[2], tab[5], tab[15]
     kind = i_n[l, 7]
     for i in range(3):
         for j in range(3):
@@ -440,7 +436,8 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
     C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
     """
-    i_n, cen, cen_first, lk_i, lk_x, lim_d, lim, R_home = tab[0], tab[5], tab[6], tab[7], tab[8], tab[13], tab[14], tab[18]
+    i_n, dkind, daxis, dpoint, cen, cen_first, lk_i, lk_x, lim_d, lim, f_leg, R_home = (
+        tab[0], tab[1], tab[2], tab[3], tab[5], tab[6], tab[7], tab[8], tab[13], tab[14], tab[15], tab[18])
     L = i_n.shape[0]
     n = R_t.shape[0]
     ndm = q_out.shape[2]
@@ -468,7 +465,7 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 q[k] = 0.0
             closed = False
             if i_n[l, 7] > 0 and not numeric_only:
-                closed = _closed_form(l, tab, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
+                closed = _closed_form(l, i_n, daxis, cen, f_leg, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
                                       Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
                 if closed:
                     # the orientation holds by construction (R_nd is the product); check the position
@@ -479,11 +476,11 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                         q[k] = 0.0
             if not closed:
                 for it in range(MAX_ITER):
-                    _forward(l, q, tab, Rp, tp, Rk, tk)
-                    res = _end_error(l, tab, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
+                    _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
+                    res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
                     if not (res > TOL * 1e-2 and np.isfinite(res)):
                         break
-                    _twists(l, tab, Rp, tp, C, tw)
+                    _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
                     # least-squares step (pinv): normal equations, J (6, nd) = tw^T
                     if nd <= 6:
                         tr = 0.0
@@ -532,8 +529,8 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                     f = min(1.0, MAX_STEP / max(big, 1e-300))
                     for k in range(nd):
                         q[k] += f * rhs[k]
-                _forward(l, q, tab, Rp, tp, Rk, tk)
-                res = _end_error(l, tab, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
+                _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
+                res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
             # ---- outputs of the converged configuration
             closed_out[l, p] = closed
             res_out[l, p] = res
@@ -548,7 +545,7 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
             for i in range(3):
                 C_out[l, p, i] = C[i]
             if not closed:
-                _twists(l, tab, Rp, tp, C, tw)
+                _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
             for k in range(nd):
                 for i in range(6):
                     tw_out[l, p, k, i] = tw[k, i]
@@ -735,6 +732,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     yv = np.zeros((L, 6))
     WC = np.zeros((L, 6))
     Z3 = np.zeros((3, 3))
+    Y3 = np.zeros((3, 3))
     Aw = np.zeros((6, 6))
     Vr = np.zeros((6, 6))
     vn = np.zeros(6)
@@ -886,12 +884,10 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     for i in range(3):
                         for j in range(3):
                             Z3[i, j] = c * A3[l, i, j] + (1.0 if i == j else 0.0)
-                    if not _chol(Z3, Lf, 3):   # I + c B^T M B is SPD
-                        return -1 - p
-                    _chol_inverse(Lf, Y[l], ev, xv, 3)
+                    _inverse3(Z3, Y3)          # I + c B^T M B is SPD
                     for i in range(3):
                         for j in range(3):
-                            Y[l, i, j] *= c
+                            Y[l, i, j] = c * Y3[i, j]
                     for i in range(6):
                         for k in range(3):
                             HY[i, k] = H[l, i, 0] * Y[l, 0, k] + H[l, i, 1] * Y[l, 1, k] + H[l, i, 2] * Y[l, 2, k]
