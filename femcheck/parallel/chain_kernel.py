@@ -323,7 +323,7 @@ def _s_axes(R, A, T, q1, out):
             out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")  # inlined: ~20 array arguments per call otherwise
 def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
     """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
     boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
