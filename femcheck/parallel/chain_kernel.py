@@ -633,7 +633,7 @@ def _hertz_k(F, Es, Rs):
     return (6.0 * Es * Es * Rs * F) ** (1.0 / 3.0)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
     """Ae (m, m) = N^T S_C N of a cantilever link: N's wrenches carried to the link tip E (r = C - E) and into
     the link frame R, then the sparse local tip compliance (femcheck.compliance.cantilever_beam)."""
@@ -664,7 +664,7 @@ def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
             Ae[b, a] = v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _sym_add(K, E, M, m, sign, xv):
     """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
     for i in range(6):
