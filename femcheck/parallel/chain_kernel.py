@@ -13,15 +13,18 @@ Inverse kinematics (:func:`ik_kernel`), per leg and pose:
 - numeric otherwise: Gauss-Newton from the home pose on the end frame, the step from the normal equations
   (``(J^T J) dq = J^T e``; ``J J^T`` for a redundant leg), limited to ``MAX_STEP`` as in numpy.
 
-Both end with the forward pass (product of exponentials of the home screws) that gives the joint centres, the
-unit joint twists at C, the link frames and the residual, so a closed form is checked by its own residual.
+The numeric solution ends with the forward pass (product of exponentials of the home screws) that gives the
+joint centres, the unit joint twists at C, the link frames and the residual. A closed form writes the same
+quantities from its angles directly and is checked by its own position residual (its orientation holds by
+construction); the tests hold it to the numeric solution.
 
 Chain model (:func:`chain_kernel`), per pose: every element's compliance carried to C_i (cantilever links,
 drive ``c xi xi^T``, Hertz line contact in the link frame), the leg's wrench basis N (``I`` for rigid joints;
 for released joints the Householder complement of the passive twists), ``A = N^T S N``, ``E = G^T N`` and
 ``K_T = sum E A^-1 E^T``. The Hertz point contacts ``c I3`` on the translations are linearized at their leg's
-force by fixed-point iteration; for a leg with a basis of 3 or more wrenches Woodbury's identity keeps the
-iteration to 3x3 inverses (as in the 6-PSU kernel), for 1 or 2 the m x m matrix is refactored.
+force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
+keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released legs
+with a closed form use their one wrench directly, the force along the line of the S and U centres.
 """
 from __future__ import annotations
 
@@ -112,15 +115,6 @@ def _mm3(A, B, out):
     for i in range(3):
         for j in range(3):
             out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
-
-
-@njit(cache=True, error_model="numpy")
-def _angle_of(R):
-    """|rotation vector| of R (rad), robust at every angle: atan2(|vee(R - R^T)| / 2, (tr R - 1) / 2)."""
-    a = R[2, 1] - R[1, 2]
-    b = R[0, 2] - R[2, 0]
-    c = R[1, 0] - R[0, 1]
-    return np.arctan2(0.5 * np.sqrt(a * a + b * b + c * c), 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0))
 
 
 @njit(cache=True, error_model="numpy")

@@ -69,7 +69,6 @@ def _ik_kind(leg) -> int:
 
 
 def _build(device) -> DeviceTables:
-    from femcheck.parallel.leg_kinematics import TOL  # noqa: F401  (same tolerance in the kernels)
     legs = device.legs
     L = len(legs)
     names = device.element_names
@@ -95,7 +94,7 @@ def _build(device) -> DeviceTables:
     hp_joint = np.full((L, nhp), -1, np.int64)
     lim_d = np.zeros((L, nlim), np.int64)
     lim = np.zeros((L, nlim, 2))
-    f_leg = np.zeros((L, 5))                    # drive compliance, PSU root sign, spare
+    f_leg = np.zeros((L, 2))                    # drive compliance, sign of the F-P-S-U slider root at home
     b_plat = np.zeros((L, 3))
     kinds = np.array([names.index("drive"),
                       names.index("hertz_point") if "hertz_point" in names else -1,
