@@ -107,3 +107,25 @@ def test_unknown_backend_is_refused(device_case):
     _, case = device_case
     with pytest.raises(ValueError, match="backend"):
         evaluate(case.device, cube_points(case), backend="fortran")
+
+
+def test_redundant_legs_take_the_numeric_ik_and_the_numpy_released_model(tmp_path):
+    """S-P-S struts (the hexapod with its base U joints made S): 7 freedoms per leg, the spin about the strut is
+    redundant, so the passive twists are dependent. The compiled IK takes the numeric (redundant) step and the
+    released model falls back to numpy; both still agree with the numpy path to rounding."""
+    text = (ROOT / "cases" / "hexapod_6ups.toml").read_text().replace('type = "U"', 'type = "S"')
+    text = "\n".join(line for line in text.splitlines() if not line.strip().startswith("hertz_line"))
+    (tmp_path / "sps.toml").write_text(text)
+    case = load_case(tmp_path / "sps.toml")
+    dev = case.device
+    tb = device_tables(dev)
+    assert not tb.released_ok and (tb.ik_kind == IK_NUMERIC).all()
+    P = _poses("sps", case, n=10)
+    a, b = solve_legs(dev, P), solve_legs(dev, P, backend="numpy")
+    assert a.ok.all() and b.ok.all()
+    for sa, sb in zip(a.legs, b.legs):
+        assert np.abs(sa.C - sb.C).max() < Q_TOL
+    for joints in ("rigid", "released"):
+        r1 = evaluate(dev, P, [1.0, 2.0, 10.0, 0.0, 0.0, 0.0], joints=joints)
+        r2 = evaluate(dev, P, [1.0, 2.0, 10.0, 0.0, 0.0, 0.0], joints=joints, state=b, backend="numpy")
+        assert _rel(r2.K, r1.K) < RTOL
