@@ -35,11 +35,12 @@ def _poses(c6):
 @pytest.mark.parametrize("model", ["simplified", "detailed"])
 @pytest.mark.parametrize("joints", ["rigid", "released"])
 @pytest.mark.parametrize("wrench", [None, [0, 0, 15, 0, 0, 0], [15, -5, 0, 0.1, 0, 0]])
-def test_general_model_reproduces_the_6psu_kernel(cases, model, joints, wrench):
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
+def test_general_model_reproduces_the_6psu_kernel(cases, model, joints, wrench, backend):
     c6, cp = cases
     P = _poses(c6)
     a = evaluate_6psu(c6, P, wrench, model=model, joints=joints)
-    b = evaluate(cp.device, P, wrench, model=model, joints=joints)
+    b = evaluate(cp.device, P, wrench, model=model, joints=joints, backend=backend)
     assert np.abs(a.K - b.K).max() < RTOL * np.abs(a.K).max()
     if wrench is not None:
         cols = [b.element_names.index(n) for n in NAMES]
@@ -50,10 +51,22 @@ def test_numeric_ik_gives_the_6psu_slider_positions(cases):
     c6, cp = cases
     P = _poses(c6)
     s6 = leg_geometry(c6, P).slider
-    state = solve_legs(cp.device, P)
+    state = solve_legs(cp.device, P, backend="numpy")
     home = np.array([np.linalg.norm(leg.centres[1] - leg.centres[0]) for leg in cp.device.legs])
     s = home + np.stack([st.q[:, leg.actuated_dof] for leg, st in zip(cp.device.legs, state.legs)], axis=1)
     assert np.abs(s - s6).max() < 1e-10  # the IK stops at 1e-11 m
+
+
+def test_closed_form_slider_positions(cases):
+    """The compiled path's closed form (slider from the sphere |C - B| = L) against the 6-PSU's IK."""
+    c6, cp = cases
+    P = _poses(c6)
+    s6 = leg_geometry(c6, P).slider
+    state = solve_legs(cp.device, P)
+    assert state.packed[5].all()                             # every leg took the closed form
+    home = np.array([np.linalg.norm(leg.centres[1] - leg.centres[0]) for leg in cp.device.legs])
+    s = home + np.stack([st.q[:, leg.actuated_dof] for leg, st in zip(cp.device.legs, state.legs)], axis=1)
+    assert np.abs(s - s6).max() < 1e-12  # two closed forms of the same root: rounding only (measured 1e-16)
 
 
 @pytest.mark.parametrize("joints", ["rigid", "released"])

@@ -2,10 +2,12 @@
 
 On the same poses of the 6-PSU cube (4,000 poses, TCP shifted up to ±25 mm), the 6-PSU numba kernel on
 ``cases/haptic_6psu.toml`` and the general model on ``cases/haptic_6psu_legs.toml`` (the same device, leg by
-leg): poses/s of each (the general model with and without its inverse kinematics), their ratio (the issue's
-target for moving the 6-PSU onto the general model is ≤ 1.3), and the largest relative K_T difference.
-Then the hexapod and the Delta: poses/s of the detailed model, and the beam FE's largest relative difference
-from it at the nine test points (both levels, both idealizations).
+leg), detailed model, both joint idealizations: poses/s of the kernel, of the general model's compiled path
+(default) with and without its inverse kinematics, of its numpy reference path, the time ratios general / kernel
+(the issue's target is ≤ 1.3), and the largest relative K_T difference. The timings are interleaved (kernel,
+general, general with IK, in turn, best of ``REPEAT`` rounds) so that a busy shared machine loads them alike.
+Then the hexapod and the Delta: poses/s of the detailed model (compiled and numpy, with inverse kinematics),
+and the beam FE's largest relative difference from it at the nine test points (both levels, both idealizations).
 """
 from __future__ import annotations
 
@@ -15,17 +17,22 @@ import numpy as np
 
 AREA = "parallel_device"
 N_POSES = 4000
-
-
-def _rate(fn, n, repeat=3):
-    best = min(_timed(fn) for _ in range(repeat))
-    return n / best
+REPEAT = 7
 
 
 def _timed(fn):
     t = time.perf_counter()
     fn()
     return time.perf_counter() - t
+
+
+def _rates(fns: dict, n: int, repeat: int = REPEAT) -> dict:
+    """poses/s of each function, best of ``repeat`` interleaved rounds."""
+    best = {k: np.inf for k in fns}
+    for _ in range(repeat):
+        for k, fn in fns.items():
+            best[k] = min(best[k], _timed(fn))
+    return {k: n / v for k, v in best.items()}
 
 
 def run() -> dict:
@@ -43,23 +50,36 @@ def run() -> dict:
     P = np.tile(psu_points(c6)[0], (N_POSES, 1))
     P[:, :3] += rng.uniform(-0.025, 0.025, (N_POSES, 3))
     W = [0, 0, c6.loads.detailed_test_N, 0, 0, 0]
-    evaluate_6psu(c6, P[:10], W)  # compile
+    evaluate_6psu(c6, P[:10], W)  # compile (or load the cached machine code)
+    evaluate(cp.device, P[:10], W)
     state = solve_legs(cp.device, P)
+    state_np = solve_legs(cp.device, P, backend="numpy")
     for joints in ("rigid", "released"):
-        k6 = _rate(lambda: evaluate_6psu(c6, P, W, joints=joints), N_POSES)
-        kg = _rate(lambda: evaluate(cp.device, P, W, joints=joints, state=state), N_POSES)
-        kik = _rate(lambda: evaluate(cp.device, P, W, joints=joints), N_POSES, repeat=1)
-        a, b = evaluate_6psu(c6, P, W, joints=joints), evaluate(cp.device, P, W, joints=joints, state=state)
-        out[f"psu6_kernel_{joints}_poses_per_s"] = round(k6)
-        out[f"general_{joints}_poses_per_s"] = round(kg)
-        out[f"general_{joints}_with_ik_poses_per_s"] = round(kik)
-        out[f"general_over_kernel_time_ratio_{joints}"] = round(k6 / kik, 2)
+        r = _rates({"kernel": lambda: evaluate_6psu(c6, P, W, joints=joints),
+                    "general": lambda: evaluate(cp.device, P, W, joints=joints, state=state),
+                    "general_ik": lambda: evaluate(cp.device, P, W, joints=joints)}, N_POSES)
+        r_np = _rates({"numpy": lambda: evaluate(cp.device, P, W, joints=joints, state=state_np, backend="numpy"),
+                       "numpy_ik": lambda: evaluate(cp.device, P, W, joints=joints, backend="numpy")}, N_POSES, 1)
+        a, b = evaluate_6psu(c6, P, W, joints=joints), evaluate(cp.device, P, W, joints=joints)
+        out[f"psu6_kernel_{joints}_poses_per_s"] = round(r["kernel"])
+        out[f"general_{joints}_poses_per_s"] = round(r["general"])
+        out[f"general_{joints}_with_ik_poses_per_s"] = round(r["general_ik"])
+        out[f"general_numpy_{joints}_poses_per_s"] = round(r_np["numpy"])
+        out[f"general_numpy_{joints}_with_ik_poses_per_s"] = round(r_np["numpy_ik"])
+        out[f"general_over_kernel_time_ratio_{joints}"] = round(r["kernel"] / r["general_ik"], 2)
+        out[f"general_over_kernel_time_ratio_{joints}_without_ik"] = round(r["kernel"] / r["general"], 2)
         out[f"general_vs_kernel_max_rel_dK_{joints}"] = float(np.abs(a.K - b.K).max() / np.abs(a.K).max())
+    out["general_ik_poses_per_s"] = round(_rates({"ik": lambda: solve_legs(cp.device, P)}, N_POSES)["ik"])
+    out["general_numpy_ik_poses_per_s"] = round(_rates({"ik": lambda: solve_legs(cp.device, P, backend="numpy")},
+                                                       N_POSES, 1)["ik"])
     for name in ("hexapod_6ups", "delta_3ruu"):
         case = load_case(f"cases/{name}.toml")
         Pd = np.tile(test_points(case), (N_POSES // 9, 1))
-        out[f"{name}_detailed_with_ik_poses_per_s"] = round(_rate(lambda: evaluate(case.device, Pd, [0, 0, 10, 0, 0, 0]),
-                                                                  len(Pd), repeat=1))
+        evaluate(case.device, Pd[:10], [0, 0, 10, 0, 0, 0])
+        r = _rates({"c": lambda: evaluate(case.device, Pd, [0, 0, 10, 0, 0, 0])}, len(Pd), 3)
+        r_np = _rates({"np": lambda: evaluate(case.device, Pd, [0, 0, 10, 0, 0, 0], backend="numpy")}, len(Pd), 1)
+        out[f"{name}_detailed_with_ik_poses_per_s"] = round(r["c"])
+        out[f"{name}_detailed_numpy_with_ik_poses_per_s"] = round(r_np["np"])
         worst = 0.0
         for model in ("simplified", "detailed"):
             for joints in ("rigid", "released"):

@@ -4,10 +4,13 @@ compliance-chain model ``K_T = sum_i G_i^T K_i G_i`` and its beam FE, all from o
 - :mod:`femcheck.parallel.device`: the legs as arrays (joint screws, links, joint laws) and the test points;
 - :mod:`femcheck.parallel.leg_kinematics`: inverse kinematics, joint twists, actuation Jacobian;
 - :mod:`femcheck.parallel.chain_model`: ``evaluate`` (simplified / detailed, rigid / released, element scales);
+- :mod:`femcheck.parallel.kernel_tables`, :mod:`femcheck.parallel.chain_kernel`, :mod:`femcheck.parallel.compiled`:
+  the compiled (numba) path of the inverse kinematics and of the chain model, used by default (``backend``);
+  the numpy functions above stay the reference the tests hold it to;
 - :mod:`femcheck.parallel.beam_fe`: the same device as beams with idealized joints and a rigid platform;
 - :mod:`femcheck.parallel.verification`: analytical vs beam FE at the test points (``femcheck verify``);
 - :mod:`femcheck.parallel.stiffness_map`: the ``femcheck map`` slice.
 
-The 6-PSU keeps its own compiled kernel (``femcheck.chain``); ``cases/haptic_6psu_legs.toml`` is the same device
-in this description, and the tests hold the two together.
+The 6-PSU keeps its own kernel (``femcheck.chain``); ``cases/haptic_6psu_legs.toml`` is the same device in this
+description, and the tests hold the two together (and the bench ``parallel_device`` times them on the same poses).
 """

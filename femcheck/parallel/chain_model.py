@@ -103,7 +103,7 @@ def _leg_stiffness(S, N):
 
 
 def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str = "released",
-             state: DeviceState | None = None, element_scale=None) -> ParallelResult:
+             state: DeviceState | None = None, element_scale=None, backend: str = "compiled") -> ParallelResult:
     """Stiffness, deflection and element breakdown of ``device`` (:class:`~femcheck.parallel.device.ParallelDevice`).
 
     Parameters
@@ -117,12 +117,16 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     element_scale : (L, E) or (n, L, E) factors on the compliance of element kind e (order
         ``device.element_names``) in leg i (1 = as modelled, 2 = twice as soft, 0 = rigid): the hook for
         model extensions and for locating an effect by leg and element
+    backend : "compiled" (default: the numba kernels of :mod:`femcheck.parallel.chain_kernel`, the same
+        equations one pose at a time) or "numpy" (this function's vectorized transcription, the reference)
     """
+    from femcheck.parallel.compiled import check_backend, evaluate_compiled
+    check_backend(backend)
     if model not in MODELS:
         raise ValueError(f"model: {model!r}; expected one of {list(MODELS)}")
     if joints not in JOINT_IDEALIZATIONS:
         raise ValueError(f"joints: {joints!r}; expected one of {list(JOINT_IDEALIZATIONS)}")
-    state = state if state is not None else solve_legs(device, poses)
+    state = state if state is not None else solve_legs(device, poses, backend=backend)
     n = state.n
     if not state.ok.all():
         k = int(np.flatnonzero(~state.ok)[0])
@@ -130,11 +134,16 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         raise UnreachablePoseError(f"#{k} {np.array2string(state.poses[k], precision=4)}", leg,
                                    f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
     W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
-    parts = leg_element_compliances(device, state, model)
     names = device.element_names
     L = device.n_legs
     scale = np.ones((n, L, len(names))) if element_scale is None else \
         np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, len(names))))
+    if backend == "compiled":
+        out = evaluate_compiled(device, state, W, scale, model, joints)
+        if out is not None:
+            K_T, S_T, t, K_leg, W_C, energy, k_h, iterations = out
+            return _result(model, joints, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations)
+    parts = leg_element_compliances(device, state, model)
     parts = [{name: S * scale[:, i, names.index(name), None, None] for name, S in p.items()} for i, p in enumerate(parts)]
     G = [state.G(i) for i in range(L)]
     N = [np.broadcast_to(np.eye(6), (n, 6, 6)) if joints == "rigid" else released_wrenches(leg, state.legs[i])
@@ -171,13 +180,17 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
             if li == i:
                 energy[:, i, names.index("hertz_point")] += (np.sum(W_C[:, i, :3] ** 2, axis=1)
                                                              * scale[:, i, names.index("hertz_point")] / k_h[li, j])
+    return _result(model, joints, state, W, K_T, np.linalg.inv(K_T), t, np.stack(K_leg, axis=1), W_C, names, energy,
+                   k_h, len(history) + 1)
+
+
+def _result(model, joints, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations) -> ParallelResult:
     work = np.einsum("ni,ni->n", W, t)
     with np.errstate(invalid="ignore", divide="ignore"):
         contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
-    return ParallelResult(model=model, joints=joints, poses=state.poses, wrench=W, K=K_T, S=np.linalg.inv(K_T), twist=t,
-                          leg_stiffness=np.stack(K_leg, axis=1), leg_wrench=W_C, element_names=names,
-                          element_energy=energy, contributions=contributions, hertz_stiffness=k_h,
-                          iterations=len(history) + 1, state=state)
+    return ParallelResult(model=model, joints=joints, poses=state.poses, wrench=W, K=K_T, S=S_T, twist=t,
+                          leg_stiffness=K_leg, leg_wrench=W_C, element_names=names, element_energy=energy,
+                          contributions=contributions, hertz_stiffness=k_h, iterations=iterations, state=state)
 
 
 def _translational(c):

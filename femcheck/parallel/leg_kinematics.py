@@ -54,6 +54,8 @@ class DeviceState:
     tcp: np.ndarray
     R: np.ndarray
     legs: tuple[LegState, ...]
+    #: leg-major padded arrays of the compiled path (C, centres, twists, link_R, link_length, closed form used)
+    packed: tuple | None = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def n(self) -> int:
@@ -140,11 +142,19 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
                     link_R=link_R, link_length=link_len)
 
 
-def solve_legs(device, poses) -> DeviceState:
-    """Inverse kinematics of every leg at TCP poses (n, 6) [x, y, z, rx, ry, rz] (m, rad)."""
+def solve_legs(device, poses, backend: str = "compiled") -> DeviceState:
+    """Inverse kinematics of every leg at TCP poses (n, 6) [x, y, z, rx, ry, rz] (m, rad).
+
+    ``backend``: "compiled" (default; :mod:`femcheck.parallel.chain_kernel`: closed forms where a leg has one,
+    the same Gauss-Newton otherwise) or "numpy" (this module, the reference).
+    """
+    from femcheck.parallel.compiled import check_backend, solve_legs_compiled
+    check_backend(backend)
     P = np.atleast_2d(np.asarray(poses, dtype=float))
     if P.ndim != 2 or P.shape[1] != 6 or not np.all(np.isfinite(P)):
         raise ValueError(f"poses: expected finite (n, 6) [x, y, z, rx, ry, rz] in m and rad, got shape {P.shape}")
+    if backend == "compiled":
+        return solve_legs_compiled(device, np.ascontiguousarray(P))
     R = rotvec_to_matrix(P[:, 3:])
     origin = P[:, :3] - R @ device.tcp_offset
     R_home = rotvec_to_matrix(device.home_pose[3:])

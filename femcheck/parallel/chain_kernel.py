@@ -1,0 +1,1002 @@
+"""Compiled (numba) path of the general parallel-device chain model: the same equations as
+:mod:`femcheck.parallel.leg_kinematics` and :mod:`femcheck.parallel.chain_model`, one pose and one leg at a time
+in machine code, on the flat arrays of :mod:`femcheck.parallel.kernel_tables` (issue 19 item 2).
+
+Inverse kinematics (:func:`ik_kernel`), per leg and pose:
+
+- closed form where the leg has one. ``F-P*-S-U`` (the 6-PSU): the slide from the sphere ``|C - B| = L``,
+  ``q_P = b - sigma sqrt(b^2 - |r|^2 + L^2)`` with ``r = C - c_S``, ``b = u . r`` and sigma the home branch;
+  the U angles from Paden-Kahan subproblem 2 (``Rot(a2, -q5) Rot(a1, -q4) d_0 = R^T d``) and the S angles
+  from the rotation left over (Cardan angles about its orthonormal axes). ``U-P*-S`` (the hexapod strut): the
+  leg length ``|p + R b - a|``, the U angles from subproblem 2 pointing the strut, the S angles as above.
+  Where the closed form has no real solution the leg falls back to the numeric solution;
+- numeric otherwise: Gauss-Newton from the home pose on the end frame, the step from the normal equations
+  (``(J^T J) dq = J^T e``; ``J J^T`` for a redundant leg), limited to ``MAX_STEP`` as in numpy.
+
+The numeric solution ends with the forward pass (product of exponentials of the home screws) that gives the
+joint centres, the unit joint twists at C, the link frames and the residual. A closed form writes the same
+quantities from its angles directly and is checked by its own position residual (its orientation holds by
+construction); the tests hold it to the numeric solution.
+
+Chain model (:func:`chain_kernel`), per pose: every element's compliance carried to C_i (cantilever links,
+drive ``c xi xi^T``, Hertz line contact in the link frame), the leg's wrench basis N (``I`` for rigid joints;
+for released joints the Householder complement of the passive twists), ``A = N^T S N``, ``E = G^T N`` and
+``K_T = sum E A^-1 E^T``. The Hertz point contacts ``c I3`` on the translations are linearized at their leg's
+force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
+keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released legs
+with a closed form use their one wrench directly, the force along the line of the S and U centres.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from femcheck.chain.haptic_6psu_kernel import _inverse3
+
+#: the numeric IK's constants (as :mod:`femcheck.parallel.leg_kinematics`)
+MAX_ITER = 60
+TOL = 1e-11
+MAX_STEP = 0.3
+_FP_TOL = 1e-12
+_FP_MAX_ITER = 200
+
+
+# ---------------------------------------------------------------- small dense algebra (explicit loops, size m)
+@njit(cache=True, error_model="numpy")
+def _chol(A, Lf, m):
+    """Lower Cholesky factor of A[:m, :m] into Lf; False if not positive definite."""
+    for j in range(m):
+        s = A[j, j]
+        for k in range(j):
+            s -= Lf[j, k] * Lf[j, k]
+        if not s > 0.0:
+            return False
+        Lf[j, j] = np.sqrt(s)
+        for i in range(j + 1, m):
+            s = A[i, j]
+            for k in range(j):
+                s -= Lf[i, k] * Lf[j, k]
+            Lf[i, j] = s / Lf[j, j]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _chol_solve(Lf, b, x, m):
+    for i in range(m):
+        s = b[i]
+        for k in range(i):
+            s -= Lf[i, k] * x[k]
+        x[i] = s / Lf[i, i]
+    for i in range(m - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, m):
+            s -= Lf[k, i] * x[k]
+        x[i] = s / Lf[i, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _chol_inverse(Lf, out, e, x, m):
+    for j in range(m):
+        for i in range(m):
+            e[i] = 0.0
+        e[j] = 1.0
+        _chol_solve(Lf, e, x, m)
+        for i in range(m):
+            out[i, j] = x[i]
+    for i in range(m):
+        for j in range(i + 1, m):
+            s = 0.5 * (out[i, j] + out[j, i])
+            out[i, j] = s
+            out[j, i] = s
+
+
+@njit(cache=True, error_model="numpy")
+def _rodrigues(w, q, R):
+    _rodrigues_cs(w, np.cos(q), np.sin(q), R)
+
+
+@njit(cache=True, error_model="numpy")
+def _rodrigues_cs(w, c, s, R):
+    """R = Rot(w, q) from c = cos q, s = sin q (unit axis w)."""
+    v = 1.0 - c
+    R[0, 0] = c + w[0] * w[0] * v
+    R[0, 1] = w[0] * w[1] * v - w[2] * s
+    R[0, 2] = w[0] * w[2] * v + w[1] * s
+    R[1, 0] = w[1] * w[0] * v + w[2] * s
+    R[1, 1] = c + w[1] * w[1] * v
+    R[1, 2] = w[1] * w[2] * v - w[0] * s
+    R[2, 0] = w[2] * w[0] * v - w[1] * s
+    R[2, 1] = w[2] * w[1] * v + w[0] * s
+    R[2, 2] = c + w[2] * w[2] * v
+
+
+@njit(cache=True, error_model="numpy")
+def _mm3(A, B, out):
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+
+
+@njit(cache=True, error_model="numpy")
+def _rotvec(R, out):
+    """Rotation vector of R (as ``femcheck.kinematics.frames.matrix_to_rotvec``, angles below pi)."""
+    cs = (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) / 2.0
+    cs = min(1.0, max(-1.0, cs))
+    th = np.arccos(cs)
+    s = np.sin(th)
+    f = 0.5 if th < 1e-8 else th / (2.0 * (1.0 if s == 0.0 else s))
+    out[0] = (R[2, 1] - R[1, 2]) * f
+    out[1] = (R[0, 2] - R[2, 0]) * f
+    out[2] = (R[1, 0] - R[0, 1]) * f
+
+
+# ---------------------------------------------------------------- forward pass of one leg
+@njit(cache=True, error_model="numpy")
+def _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk):
+    """Prefix transforms Rp (nd+1, 3, 3), tp (nd+1, 3) of the freedoms of leg l at joint values q."""
+    nd = i_n[l, 0]
+    for i in range(3):
+        for j in range(3):
+            Rp[0, i, j] = 1.0 if i == j else 0.0
+        tp[0, i] = 0.0
+    for k in range(nd):
+        w = daxis[l, k]
+        if dkind[l, k] == 0:
+            _rodrigues(w, q[k], Rk)
+            c = dpoint[l, k]
+            for i in range(3):
+                tk[i] = c[i] - (Rk[i, 0] * c[0] + Rk[i, 1] * c[1] + Rk[i, 2] * c[2])
+        else:
+            for i in range(3):
+                for j in range(3):
+                    Rk[i, j] = 1.0 if i == j else 0.0
+                tk[i] = w[i] * q[k]
+        for i in range(3):
+            for j in range(3):
+                Rp[k + 1, i, j] = Rp[k, i, 0] * Rk[0, j] + Rp[k, i, 1] * Rk[1, j] + Rp[k, i, 2] * Rk[2, j]
+            tp[k + 1, i] = Rp[k, i, 0] * tk[0] + Rp[k, i, 1] * tk[1] + Rp[k, i, 2] * tk[2] + tp[k, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
+    """C (3,) the leg's attachment, e (6,) [C_t - C; rotvec(R_t (R_nd R_home)^T)]; returns |e|."""
+    nd = i_n[l, 0]
+    cl = cen[l, i_n[l, 1] - 1]
+    for i in range(3):
+        C[i] = Rp[nd, i, 0] * cl[0] + Rp[nd, i, 1] * cl[1] + Rp[nd, i, 2] * cl[2] + tp[nd, i]
+        e[i] = C_t[i] - C[i]
+    _mm3(Rp[nd], R_home, Rend)
+    for i in range(3):
+        for j in range(3):
+            Rerr[i, j] = R_t[i, 0] * Rend[j, 0] + R_t[i, 1] * Rend[j, 1] + R_t[i, 2] * Rend[j, 2]
+    _rotvec(Rerr, e[3:])
+    acc = 0.0
+    for i in range(6):
+        acc += e[i] * e[i]
+    return np.sqrt(acc)
+
+
+@njit(cache=True, error_model="numpy")
+def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw):
+    """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0]."""
+    for k in range(i_n[l, 0]):
+        a, c0 = daxis[l, k], dpoint[l, k]
+        w0 = Rp[k, 0, 0] * a[0] + Rp[k, 0, 1] * a[1] + Rp[k, 0, 2] * a[2]
+        w1 = Rp[k, 1, 0] * a[0] + Rp[k, 1, 1] * a[1] + Rp[k, 1, 2] * a[2]
+        w2 = Rp[k, 2, 0] * a[0] + Rp[k, 2, 1] * a[1] + Rp[k, 2, 2] * a[2]
+        if dkind[l, k] == 0:
+            r0 = C[0] - (Rp[k, 0, 0] * c0[0] + Rp[k, 0, 1] * c0[1] + Rp[k, 0, 2] * c0[2] + tp[k, 0])
+            r1 = C[1] - (Rp[k, 1, 0] * c0[0] + Rp[k, 1, 1] * c0[1] + Rp[k, 1, 2] * c0[2] + tp[k, 1])
+            r2 = C[2] - (Rp[k, 2, 0] * c0[0] + Rp[k, 2, 1] * c0[1] + Rp[k, 2, 2] * c0[2] + tp[k, 2])
+            tw[k, 0] = w1 * r2 - w2 * r1
+            tw[k, 1] = w2 * r0 - w0 * r2
+            tw[k, 2] = w0 * r1 - w1 * r0
+            tw[k, 3], tw[k, 4], tw[k, 5] = w0, w1, w2
+        else:
+            tw[k, 0], tw[k, 1], tw[k, 2] = w0, w1, w2
+            tw[k, 3] = tw[k, 4] = tw[k, 5] = 0.0
+
+
+# ---------------------------------------------------------------- closed forms
+@njit(cache=True, error_model="numpy")
+def _sp1(w, p, z, cs, k):
+    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2])."""
+    wp = w[0] * p[0] + w[1] * p[1] + w[2] * p[2]
+    wz = w[0] * z[0] + w[1] * z[1] + w[2] * z[2]
+    p0, p1, p2 = p[0] - w[0] * wp, p[1] - w[1] * wp, p[2] - w[2] * wp
+    z0, z1, z2 = z[0] - w[0] * wz, z[1] - w[1] * wz, z[2] - w[2] * wz
+    cx, cy, cz = p1 * z2 - p2 * z1, p2 * z0 - p0 * z2, p0 * z1 - p1 * z0
+    y, x = w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2
+    r = np.sqrt(x * x + y * y)
+    if r > 0.0:
+        cs[k], cs[k + 1] = x / r, y / r
+    else:
+        cs[k], cs[k + 1] = 1.0, 0.0
+    return np.arctan2(y, x)
+
+
+@njit(cache=True, error_model="numpy")
+def _sp2(w1, w2, p, qv, z, out):
+    """Paden-Kahan subproblem 2: Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point), the solution whose
+    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2);
+    False if none is real."""
+    c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
+    den = 1.0 - c12 * c12
+    if den < 1e-12:
+        return False
+    w1q = w1[0] * qv[0] + w1[1] * qv[1] + w1[2] * qv[2]
+    w2p = w2[0] * p[0] + w2[1] * p[1] + w2[2] * p[2]
+    al = (w1q - c12 * w2p) / den
+    be = (w2p - c12 * w1q) / den
+    cr0 = w1[1] * w2[2] - w1[2] * w2[1]
+    cr1 = w1[2] * w2[0] - w1[0] * w2[2]
+    cr2 = w1[0] * w2[1] - w1[1] * w2[0]
+    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+    g2 = (pp - al * al - be * be - 2.0 * al * be * c12) / den
+    if g2 < 0.0:
+        if g2 < -1e-12 * pp:
+            return False
+        g2 = 0.0
+    g = np.sqrt(g2)
+    best = 1e300
+    for sg in (-1.0, 1.0):
+        d = 0.0
+        for i in range(3):
+            zi = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
+            d += (zi - p[i]) ** 2
+        if d < best:
+            best = d
+            for i in range(3):
+                z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
+    out[1] = _sp1(w2, p, z, out, 4)
+    out[0] = _sp1(w1, z, qv, out, 2)
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _cardan(daxis_s, Rs, q, k0, A, T):
+    """S joint angles q[k0:k0+3] with Rot(s1, q1) Rot(s2, q2) Rot(s3, q3) = Rs, s orthonormal right-handed."""
+    for i in range(3):
+        for j in range(3):
+            A[i, j] = daxis_s[j, i]       # columns s1, s2, s3
+    # T = A^T Rs A = Rx(q1) Ry(q2) Rz(q3); only T[0, :2] and T[:, 2] are needed
+    for j in range(3):
+        x0 = Rs[0, 0] * A[0, j] + Rs[0, 1] * A[1, j] + Rs[0, 2] * A[2, j]
+        x1 = Rs[1, 0] * A[0, j] + Rs[1, 1] * A[1, j] + Rs[1, 2] * A[2, j]
+        x2 = Rs[2, 0] * A[0, j] + Rs[2, 1] * A[1, j] + Rs[2, 2] * A[2, j]
+        for i in range(3):
+            T[i, j] = A[0, i] * x0 + A[1, i] * x1 + A[2, i] * x2
+    q[k0 + 1] = np.arcsin(min(1.0, max(-1.0, T[0, 2])))
+    q[k0] = np.arctan2(-T[1, 2], T[2, 2])
+    q[k0 + 2] = np.arctan2(-T[0, 1], T[0, 0])
+
+
+@njit(cache=True, error_model="numpy")
+def _set_transform(Rp, tp, k, R, c_from, c_to):
+    """Prefix k: x -> R (x - c_from) + c_to, i.e. Rp[k] = R, tp[k] = c_to - R c_from."""
+    for i in range(3):
+        for j in range(3):
+            Rp[k, i, j] = R[i, j]
+        tp[k, i] = c_to[i] - (R[i, 0] * c_from[0] + R[i, 1] * c_from[1] + R[i, 2] * c_from[2])
+
+
+@njit(cache=True, error_model="numpy")
+def _set_twist(tw, k, R, a, C, c, revolute):
+    """tw[k] = [w x (C - c); w] (revolute) or [w; 0] (slide), w = R a."""
+    w0 = R[0, 0] * a[0] + R[0, 1] * a[1] + R[0, 2] * a[2]
+    w1 = R[1, 0] * a[0] + R[1, 1] * a[1] + R[1, 2] * a[2]
+    w2 = R[2, 0] * a[0] + R[2, 1] * a[1] + R[2, 2] * a[2]
+    if revolute:
+        r0, r1, r2 = C[0] - c[0], C[1] - c[1], C[2] - c[2]
+        tw[k, 0] = w1 * r2 - w2 * r1
+        tw[k, 1] = w2 * r0 - w0 * r2
+        tw[k, 2] = w0 * r1 - w1 * r0
+        tw[k, 3], tw[k, 4], tw[k, 5] = w0, w1, w2
+    else:
+        tw[k, 0], tw[k, 1], tw[k, 2] = w0, w1, w2
+        tw[k, 3] = tw[k, 4] = tw[k, 5] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _s_axes(R, A, T, q1, out):
+    """The S joint's three axes at the pose, R (rotation before the joint) times A e1, A Rx(q1) e2,
+    A Rx(q1) Ry(q2) e3 (the last is A T[:, 2]); out (3, 3) rows. cos q1, sin q1 from T[:, 2] = [s2, -s1 c2, c1 c2]."""
+    c2 = np.sqrt(T[1, 2] * T[1, 2] + T[2, 2] * T[2, 2])
+    if c2 > 1e-9:
+        c1, s1 = T[2, 2] / c2, -T[1, 2] / c2
+    else:
+        c1, s1 = np.cos(q1), np.sin(q1)
+    for i in range(3):
+        v0 = A[i, 0]
+        v1 = A[i, 1] * c1 + A[i, 2] * s1
+        v2 = A[i, 0] * T[0, 2] + A[i, 1] * T[1, 2] + A[i, 2] * T[2, 2]
+        out[0, i], out[1, i], out[2, i] = v0, v1, v2
+    for k in range(3):
+        x0, x1, x2 = out[k, 0], out[k, 1], out[k, 2]
+        for i in range(3):
+            out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
+
+
+@njit(cache=True, error_model="numpy", inline="always")  # inlined: ~20 array arguments per call otherwise
+def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
+    """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
+    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
+    kind = i_n[l, 7]
+    for i in range(3):
+        for j in range(3):
+            # R_nd = R_t R_home^T: the rotation the leg's freedoms must produce
+            Rn[i, j] = R_t[i, 0] * R_home[j, 0] + R_t[i, 1] * R_home[j, 1] + R_t[i, 2] * R_home[j, 2]
+            I3[i, j] = 1.0 if i == j else 0.0
+    if kind == 1:   # F-P*-S-U: dofs [P, S1, S2, S3, U1, U2]
+        u = daxis[l, 0]
+        cS, cU = cen[l, 1], cen[l, 2]
+        b, rr, L2 = 0.0, 0.0, 0.0
+        for i in range(3):
+            ri = C_t[i] - cS[i]
+            b += u[i] * ri
+            rr += ri * ri
+            L2 += (cU[i] - cS[i]) ** 2
+        disc = b * b - rr + L2
+        if disc < 0.0:
+            return False
+        q[0] = b - f_leg[l, 1] * np.sqrt(disc)
+        for i in range(3):
+            w3[i] = C_t[i] - cS[i] - u[i] * q[0]                 # d now (B -> C)
+            z3[i] = cU[i] - cS[i]                                # d at home
+        for i in range(3):
+            v3[i] = Rn[0, i] * w3[0] + Rn[1, i] * w3[1] + Rn[2, i] * w3[2]   # R_nd^T d
+        # Rot(a2, t1) Rot(a1, t2) d_home = R_nd^T d  with t1 = -q5, t2 = -q4
+        if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang):
+            return False
+        q[5], q[4] = -ang[0], -ang[1]
+        _rodrigues_cs(daxis[l, 5], ang[2], ang[3], Ra)
+        _rodrigues_cs(daxis[l, 4], ang[4], ang[5], Rb)
+        _mm3(Rn, Ra, T3)
+        _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
+        _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
+        for i in range(3):
+            v3[i] = cS[i] + u[i] * q[0]                          # B
+        _set_transform(Rp, tp, 0, I3, cS, cS)
+        _set_transform(Rp, tp, 1, I3, cS, v3)
+        _set_transform(Rp, tp, 4, Rs, cS, v3)
+        for i in range(3):
+            C[i] = Rs[i, 0] * z3[0] + Rs[i, 1] * z3[1] + Rs[i, 2] * z3[2] + v3[i]
+        _set_transform(Rp, tp, 6, Rn, cU, C)
+        _set_twist(tw, 0, I3, u, C, C, False)
+        _s_axes(I3, A3, T3, q[1], Sx)
+        for k in range(3):
+            _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
+        _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
+        _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
+        return True
+    # U-P*-S: dofs [U1, U2, P, S1, S2, S3]
+    u = daxis[l, 2]
+    cU, cS = cen[l, 0], cen[l, 1]
+    L0, Lw, sg = 0.0, 0.0, 0.0
+    for i in range(3):
+        z3[i] = cS[i] - cU[i]
+        w3[i] = C_t[i] - cU[i]
+        L0 += z3[i] * z3[i]
+        Lw += w3[i] * w3[i]
+    L0, Lw = np.sqrt(L0), np.sqrt(Lw)
+    if not Lw > 0.0:
+        return False
+    for i in range(3):
+        z3[i] /= L0
+        w3[i] /= Lw
+        sg += u[i] * z3[i]
+    q[2] = (Lw - L0) / sg
+    if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang):
+        return False
+    q[0], q[1] = ang[0], ang[1]
+    _rodrigues_cs(daxis[l, 0], ang[2], ang[3], Ra)
+    _rodrigues_cs(daxis[l, 1], ang[4], ang[5], Rb)
+    _mm3(Ra, Rb, Sx)                                             # R_U
+    for i in range(3):
+        for j in range(3):
+            Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_S = R_U^T R_nd
+    _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
+    for i in range(3):
+        for j in range(3):
+            Rb[i, j] = Sx[i, j]                                  # keep R_U
+    for i in range(3):
+        v3[i] = cS[i] + u[i] * q[2]                              # the S centre before the U turns it
+    _set_transform(Rp, tp, 0, I3, cU, cU)
+    _set_transform(Rp, tp, 2, Rb, cU, cU)
+    for i in range(3):
+        w3[i] = v3[i] - cU[i]
+    for i in range(3):
+        C[i] = Rb[i, 0] * w3[0] + Rb[i, 1] * w3[1] + Rb[i, 2] * w3[2] + cU[i]
+    for i in range(3):
+        w3[i] = cU[i] - u[i] * q[2]
+    _set_transform(Rp, tp, 3, Rb, w3, cU)                        # after the slide: R_U (x + u q - c_U) + c_U
+    _set_transform(Rp, tp, 6, Rn, cS, C)
+    _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
+    _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
+    _set_twist(tw, 2, Rb, u, C, C, False)
+    _s_axes(Rb, A3, T3, q[3], Sx)
+    for k in range(3):
+        _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
+    return True
+
+
+# ---------------------------------------------------------------- inverse kinematics of every leg
+@njit(cache=True, error_model="numpy")
+def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C_out, cen_out, tw_out, lR_out,
+              len_out):
+    """Inverse kinematics of every leg at n poses.
+
+    R_t (n, 3, 3) platform orientations; C_t (L, n, 3) attachment targets; numeric_only: skip the closed forms.
+    Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
+    C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
+    """
+    i_n, dkind, daxis, dpoint, cen, cen_first, lk_i, lk_x, lim_d, lim, f_leg, R_home = (
+        tab[0], tab[1], tab[2], tab[3], tab[5], tab[6], tab[7], tab[8], tab[13], tab[14], tab[15], tab[18])
+    L = i_n.shape[0]
+    n = R_t.shape[0]
+    ndm = q_out.shape[2]
+    Rp = np.zeros((ndm + 1, 3, 3))
+    tp = np.zeros((ndm + 1, 3))
+    Rk = np.zeros((3, 3))
+    tk = np.zeros(3)
+    C = np.zeros(3)
+    e = np.zeros(6)
+    Rend = np.zeros((3, 3))
+    Rerr = np.zeros((3, 3))
+    tw = np.zeros((ndm, 6))
+    Mn = np.zeros((6, 6))
+    Lf = np.zeros((6, 6))
+    rhs = np.zeros(6)
+    y = np.zeros(6)
+    q = np.zeros(ndm)
+    w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(6)
+    Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
+                                      np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
+    for l in range(L):
+        nd = i_n[l, 0]
+        for p in range(n):
+            for k in range(ndm):
+                q[k] = 0.0
+            closed = False
+            if i_n[l, 7] > 0 and not numeric_only:
+                closed = _closed_form(l, i_n, daxis, cen, f_leg, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
+                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
+                if closed:
+                    # the orientation holds by construction (R_nd is the product); check the position
+                    res = np.sqrt((C_t[l, p, 0] - C[0]) ** 2 + (C_t[l, p, 1] - C[1]) ** 2 + (C_t[l, p, 2] - C[2]) ** 2)
+                    closed = res < TOL
+                if not closed:
+                    for k in range(ndm):
+                        q[k] = 0.0
+            if not closed:
+                for it in range(MAX_ITER):
+                    _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
+                    res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
+                    if not (res > TOL * 1e-2 and np.isfinite(res)):
+                        break
+                    _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
+                    # least-squares step (pinv): normal equations, J (6, nd) = tw^T
+                    if nd <= 6:
+                        tr = 0.0
+                        for a in range(nd):
+                            for b in range(a, nd):
+                                acc = 0.0
+                                for i in range(6):
+                                    acc += tw[a, i] * tw[b, i]
+                                Mn[a, b] = acc
+                                Mn[b, a] = acc
+                            tr += Mn[a, a]
+                            acc = 0.0
+                            for i in range(6):
+                                acc += tw[a, i] * e[i]
+                            rhs[a] = acc
+                        for a in range(nd):
+                            Mn[a, a] += 1e-13 * tr
+                        if not _chol(Mn, Lf, nd):
+                            break
+                        _chol_solve(Lf, rhs, y, nd)
+                        for a in range(nd):
+                            rhs[a] = y[a]
+                    else:
+                        tr = 0.0
+                        for a in range(6):
+                            for b in range(a, 6):
+                                acc = 0.0
+                                for k in range(nd):
+                                    acc += tw[k, a] * tw[k, b]
+                                Mn[a, b] = acc
+                                Mn[b, a] = acc
+                            tr += Mn[a, a]
+                        for a in range(6):
+                            Mn[a, a] += 1e-13 * tr
+                        if not _chol(Mn, Lf, 6):
+                            break
+                        _chol_solve(Lf, e, y, 6)
+                        for k in range(nd):
+                            acc = 0.0
+                            for i in range(6):
+                                acc += tw[k, i] * y[i]
+                            rhs[k] = acc
+                    big = 0.0
+                    for k in range(nd):
+                        big = max(big, abs(rhs[k]))
+                    f = min(1.0, MAX_STEP / max(big, 1e-300))
+                    for k in range(nd):
+                        q[k] += f * rhs[k]
+                _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
+                res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
+            # ---- outputs of the converged configuration
+            closed_out[l, p] = closed
+            res_out[l, p] = res
+            ok = res < TOL
+            for j in range(i_n[l, 5]):
+                v = q[lim_d[l, j]]
+                if not (v >= lim[l, j, 0] and v <= lim[l, j, 1]):
+                    ok = False
+            ok_out[l, p] = ok
+            for k in range(ndm):
+                q_out[l, p, k] = q[k]
+            for i in range(3):
+                C_out[l, p, i] = C[i]
+            if not closed:
+                _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
+            for k in range(nd):
+                for i in range(6):
+                    tw_out[l, p, k, i] = tw[k, i]
+            nc = i_n[l, 1]
+            for m in range(nc - 1):
+                f0 = cen_first[l, m]
+                c0 = cen[l, m]
+                for i in range(3):
+                    cen_out[l, p, m, i] = Rp[f0, i, 0] * c0[0] + Rp[f0, i, 1] * c0[1] + Rp[f0, i, 2] * c0[2] + tp[f0, i]
+            for i in range(3):
+                cen_out[l, p, nc - 1, i] = C[i]
+            for m in range(i_n[l, 2]):
+                s, en, body = lk_i[l, m, 0], lk_i[l, m, 1], lk_i[l, m, 2]
+                d0 = cen_out[l, p, en, 0] - cen_out[l, p, s, 0]
+                d1 = cen_out[l, p, en, 1] - cen_out[l, p, s, 1]
+                d2 = cen_out[l, p, en, 2] - cen_out[l, p, s, 2]
+                ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                len_out[l, p, m] = ln
+                z0, z1, z2 = d0 / ln, d1 / ln, d2 / ln
+                xa = lk_x[l, m]
+                x0 = Rp[body, 0, 0] * xa[0] + Rp[body, 0, 1] * xa[1] + Rp[body, 0, 2] * xa[2]
+                x1 = Rp[body, 1, 0] * xa[0] + Rp[body, 1, 1] * xa[1] + Rp[body, 1, 2] * xa[2]
+                x2 = Rp[body, 2, 0] * xa[0] + Rp[body, 2, 1] * xa[1] + Rp[body, 2, 2] * xa[2]
+                xz = x0 * z0 + x1 * z1 + x2 * z2
+                x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
+                xn = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+                x0, x1, x2 = x0 / xn, x1 / xn, x2 / xn
+                lR_out[l, p, m, 0, 0], lR_out[l, p, m, 1, 0], lR_out[l, p, m, 2, 0] = x0, x1, x2
+                lR_out[l, p, m, 0, 1] = z1 * x2 - z2 * x1
+                lR_out[l, p, m, 1, 1] = z2 * x0 - z0 * x2
+                lR_out[l, p, m, 2, 1] = z0 * x1 - z1 * x0
+                lR_out[l, p, m, 0, 2], lR_out[l, p, m, 1, 2], lR_out[l, p, m, 2, 2] = z0, z1, z2
+
+
+# ---------------------------------------------------------------- the chain model
+@njit(cache=True, error_model="numpy")
+def _null_basis(tw, passive, nd, Nb, Aw, Vr, vn):
+    """Nb (6, m) orthonormal wrenches reciprocal to the passive twists: Householder reflectors of the passive
+    twist matrix applied to the unit vectors e_k, k >= rank (workspaces Aw, Vr (6, 6), vn (6,)); returns m."""
+    npv = 0
+    for k in range(nd):
+        if passive[k]:
+            for i in range(6):
+                Aw[i, npv] = tw[k, i]
+            npv += 1
+    for j in range(npv):
+        nrm = 0.0
+        for i in range(j, 6):
+            nrm += Aw[i, j] * Aw[i, j]
+        nrm = np.sqrt(nrm)
+        for i in range(6):
+            Vr[j, i] = Aw[i, j] if i >= j else 0.0
+        Vr[j, j] += nrm if Aw[j, j] >= 0.0 else -nrm
+        v2 = 0.0
+        for i in range(j, 6):
+            v2 += Vr[j, i] * Vr[j, i]
+        vn[j] = v2
+        if v2 == 0.0:
+            continue
+        for c in range(j + 1, npv):
+            acc = 0.0
+            for i in range(j, 6):
+                acc += Vr[j, i] * Aw[i, c]
+            f = 2.0 * acc / v2
+            for i in range(j, 6):
+                Aw[i, c] -= f * Vr[j, i]
+    m = 6 - npv
+    for c in range(m):
+        for i in range(6):
+            Nb[i, c] = 1.0 if i == npv + c else 0.0
+        for j in range(npv - 1, -1, -1):   # Q e = H_0 H_1 ... H_{npv-1} e
+            if vn[j] == 0.0:
+                continue
+            acc = 0.0
+            for i in range(j, 6):
+                acc += Vr[j, i] * Nb[i, c]
+            f = 2.0 * acc / vn[j]
+            for i in range(j, 6):
+                Nb[i, c] -= f * Vr[j, i]
+    return m
+
+
+@njit(cache=True, error_model="numpy")
+def _hertz_k(F, Es, Rs):
+    return (6.0 * Es * Es * Rs * F) ** (1.0 / 3.0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
+    """Ae (m, m) = N^T S_C N of a cantilever link: N's wrenches carried to the link tip E (r = C - E) and into
+    the link frame R, then the sparse local tip compliance (femcheck.compliance.cantilever_beam)."""
+    E, G, A, Ix, Iy, Jt, kappa = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6]
+    lat = L / (kappa * G * A) if shear else 0.0
+    s00 = L ** 3 / (3.0 * E * Iy) + lat
+    s04 = L ** 2 / (2.0 * E * Iy)
+    s44 = L / (E * Iy)
+    s11 = L ** 3 / (3.0 * E * Ix) + lat
+    s13 = -(L ** 2) / (2.0 * E * Ix)
+    s33 = L / (E * Ix)
+    s22 = L / (E * A)
+    s55 = L / (G * Jt)
+    for a in range(m):
+        f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
+        m0 = Nb[3, a] + r[1] * f2 - r[2] * f1
+        m1 = Nb[4, a] + r[2] * f0 - r[0] * f2
+        m2 = Nb[5, a] + r[0] * f1 - r[1] * f0
+        for k in range(3):
+            V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
+            V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+    for a in range(m):
+        for b in range(a, m):
+            v = (s00 * V[a, 0] * V[b, 0] + s04 * (V[a, 0] * V[b, 4] + V[a, 4] * V[b, 0]) + s44 * V[a, 4] * V[b, 4]
+                 + s11 * V[a, 1] * V[b, 1] + s13 * (V[a, 1] * V[b, 3] + V[a, 3] * V[b, 1]) + s33 * V[a, 3] * V[b, 3]
+                 + s22 * V[a, 2] * V[b, 2] + s55 * V[a, 5] * V[b, 5])
+            Ae[a, b] = v
+            Ae[b, a] = v
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _sym_add(K, E, M, m, sign, xv):
+    """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
+    for i in range(6):
+        for a in range(m):
+            acc = 0.0
+            for b in range(m):
+                acc += E[i, b] * M[b, a]
+            xv[a] = acc
+        for j in range(i, 6):
+            acc = 0.0
+            for a in range(m):
+                acc += xv[a] * E[j, a]
+            K[i, j] += sign * acc
+
+
+@njit(cache=True, error_model="numpy")
+def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
+                 K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
+    """Evaluate n poses. State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
+    scale (n, L, E). Outputs K, S (n, 6, 6), t (n, 6), leg stiffness (n, L, 6, 6), leg wrench (n, L, 6),
+    element energy (n, L, E), Hertz point stiffness (n, L, nhp), iterations (n,). Returns 0; 1 + p if the
+    fixed point of pose p did not converge; -1 - p if a leg or platform matrix of pose p is not positive definite.
+
+    Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
+    ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
+    Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
+    i_n, passive, lk_i, lk_p, hl_c, hl_link, hp, f_leg, kinds = (tab[0], tab[4], tab[7], tab[9], tab[10], tab[11],
+                                                                 tab[12], tab[15], tab[17])
+    L = i_n.shape[0]
+    n = tcp.shape[0]
+    nl = lk_i.shape[1]
+    n_slot = nl + 2
+    k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
+    Ae = np.zeros((L, n_slot, 6, 6))
+    slot_kind = np.full((L, n_slot), -1, np.int64)
+    n_slots = np.zeros(L, np.int64)
+    V = np.zeros((6, 6))
+    r3 = np.zeros(3)
+    Nb = np.zeros((L, 6, 6))
+    mm = np.zeros(L, np.int64)
+    E = np.zeros((L, 6, 6))
+    A0 = np.zeros((6, 6))
+    Mi = np.zeros((L, 6, 6))     # A0^-1
+    X = np.zeros((L, 6, 3))      # M B
+    A3 = np.zeros((L, 3, 3))     # B^T M B
+    H = np.zeros((L, 6, 3))      # E X
+    P3 = np.zeros((L, 3, 6))     # N[:3] M E^T
+    Q3 = np.zeros((L, 3, 3))     # N[:3] X
+    Y = np.zeros((L, 3, 3))
+    a1 = np.zeros(L)             # m = 1: A0, |N[:3]|^2, current leg stiffness
+    b1 = np.zeros(L)
+    k1 = np.zeros(L)
+    mode = np.zeros(L, np.int64)
+    c_hp = np.zeros(L)
+    kh = np.zeros((L, hp.shape[1]))
+    Ai = np.zeros((6, 6))
+    Lf = np.zeros((6, 6))
+    ev = np.zeros(6)
+    xv = np.zeros(6)
+    xi = np.zeros(6)
+    K0 = np.zeros((6, 6))
+    K = np.zeros((6, 6))
+    t = np.zeros(6)
+    z = np.zeros(6)
+    yv = np.zeros((L, 6))
+    WC = np.zeros((L, 6))
+    Z3 = np.zeros((3, 3))
+    Y3 = np.zeros((3, 3))
+    Aw = np.zeros((6, 6))
+    Vr = np.zeros((6, 6))
+    vn = np.zeros(6)
+    Ht = np.zeros(3)
+    YHt = np.zeros(3)
+    HY = np.zeros((6, 3))
+    ik_kind = i_n[:, 7]
+    for p in range(n):
+        for i in range(6):
+            for j in range(6):
+                K0[i, j] = 0.0
+        any_hp = False
+        for l in range(L):
+            # ---- wrench basis N (6, m)
+            if not released:
+                m = 6
+                for i in range(6):
+                    for j in range(6):
+                        Nb[l, i, j] = 1.0 if i == j else 0.0
+            elif ik_kind[l] > 0:
+                # F-P-S-U / U-P-S: the one wrench is the force along the line of the S and U centres (through C)
+                o = 1 if ik_kind[l] == 1 else 0
+                d0 = C[l, p, 0] - cen[l, p, o, 0]
+                d1 = C[l, p, 1] - cen[l, p, o, 1]
+                d2 = C[l, p, 2] - cen[l, p, o, 2]
+                dn = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                m = 1
+                Nb[l, 0, 0], Nb[l, 1, 0], Nb[l, 2, 0] = d0 / dn, d1 / dn, d2 / dn
+                Nb[l, 3, 0] = Nb[l, 4, 0] = Nb[l, 5, 0] = 0.0
+            else:
+                m = _null_basis(tw[l, p], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
+            mm[l] = m
+            # ---- A_e = N^T S_e N of every element (compliances carried to C_l)
+            ns = 0
+            for k in range(i_n[l, 2]):
+                kind = lk_i[l, k, 3]
+                if kind < 0:
+                    continue
+                en = lk_i[l, k, 1]
+                for i in range(3):
+                    r3[i] = C[l, p, i] - cen[l, p, en, i]
+                _link_form(llen[l, p, k], lk_p[l, k], shear, lR[l, p, k], r3, Nb[l], m, Ae[l, ns], V)
+                f = scale[p, l, kind]
+                for a in range(m):
+                    for b in range(m):
+                        Ae[l, ns, a, b] *= f
+                slot_kind[l, ns] = kind
+                ns += 1
+            if detailed:
+                c = f_leg[l, 0] * scale[p, l, k_drive]
+                x = tw[l, p, i_n[l, 6]]
+                for a in range(m):
+                    acc = 0.0
+                    for i in range(6):
+                        acc += Nb[l, i, a] * x[i]
+                    xi[a] = acc
+                for a in range(m):
+                    for b in range(m):
+                        Ae[l, ns, a, b] = c * xi[a] * xi[b]
+                slot_kind[l, ns] = k_drive
+                ns += 1
+                if i_n[l, 3] > 0:
+                    f = scale[p, l, k_hl]
+                    for a in range(m):
+                        for b in range(m):
+                            Ae[l, ns, a, b] = 0.0
+                    for j in range(i_n[l, 3]):
+                        R = lR[l, p, hl_link[l, j]]
+                        for k in range(3):
+                            ck = f * (hl_c[l, j, 0] + (hl_c[l, j, 1] if k == 2 else 0.0))
+                            for a in range(m):
+                                xi[a] = R[0, k] * Nb[l, 0, a] + R[1, k] * Nb[l, 1, a] + R[2, k] * Nb[l, 2, a]
+                            for a in range(m):
+                                for b in range(m):
+                                    Ae[l, ns, a, b] += ck * xi[a] * xi[b]
+                    slot_kind[l, ns] = k_hl
+                    ns += 1
+            n_slots[l] = ns
+            for a in range(m):
+                for b in range(m):
+                    acc = 0.0
+                    for s in range(ns):
+                        acc += Ae[l, s, a, b]
+                    A0[a, b] = acc
+            # ---- E = G^T N (wrenches at the TCP)
+            for i in range(3):
+                r3[i] = C[l, p, i] - tcp[p, i]
+            for a in range(m):
+                f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
+                E[l, 0, a], E[l, 1, a], E[l, 2, a] = f0, f1, f2
+                E[l, 3, a] = r3[1] * f2 - r3[2] * f1 + Nb[l, 3, a]
+                E[l, 4, a] = r3[2] * f0 - r3[0] * f2 + Nb[l, 4, a]
+                E[l, 5, a] = r3[0] * f1 - r3[1] * f0 + Nb[l, 5, a]
+            nhp = i_n[l, 4] if detailed else 0
+            c_hp[l] = 0.0
+            for j in range(nhp):
+                kh[l, j] = _hertz_k(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
+                c_hp[l] += scale[p, l, k_hp] / kh[l, j]
+            if nhp > 0:
+                any_hp = True
+            if nhp > 0 and m == 1:
+                mode[l] = 1
+                a1[l] = A0[0, 0]
+                b1[l] = Nb[l, 0, 0] ** 2 + Nb[l, 1, 0] ** 2 + Nb[l, 2, 0] ** 2
+                continue
+            mode[l] = 2 if nhp > 0 else 0
+            if not _chol(A0, Lf, m):
+                return -1 - p
+            _chol_inverse(Lf, Mi[l], ev, xv, m)
+            _sym_add(K0, E[l], Mi[l], m, 1.0, xv)
+            if mode[l] == 2:
+                for a in range(m):
+                    for k in range(3):
+                        acc = 0.0
+                        for b in range(m):
+                            acc += Mi[l, a, b] * Nb[l, k, b]
+                        X[l, a, k] = acc
+                for k in range(3):
+                    for k2 in range(3):
+                        acc = 0.0
+                        for a in range(m):
+                            acc += Nb[l, k, a] * X[l, a, k2]
+                        A3[l, k, k2] = acc
+                        Q3[l, k, k2] = acc
+                for i in range(6):
+                    for k in range(3):
+                        acc = 0.0
+                        for a in range(m):
+                            acc += E[l, i, a] * X[l, a, k]
+                        H[l, i, k] = acc
+                # P3 = N[:3] M E^T = X^T E^T (M symmetric)
+                for k in range(3):
+                    for i in range(6):
+                        P3[l, k, i] = H[l, i, k]
+        # ---- Hertz fixed point
+        it = 0
+        while True:
+            for i in range(6):
+                for j in range(i, 6):
+                    K[i, j] = K0[i, j]
+            for l in range(L):
+                if mode[l] == 1:
+                    k1[l] = 1.0 / (a1[l] + c_hp[l] * b1[l])
+                    for i in range(6):
+                        for j in range(i, 6):
+                            K[i, j] += k1[l] * E[l, i, 0] * E[l, j, 0]
+                elif mode[l] == 2:
+                    c = c_hp[l]
+                    for i in range(3):
+                        for j in range(3):
+                            Z3[i, j] = c * A3[l, i, j] + (1.0 if i == j else 0.0)
+                    _inverse3(Z3, Y3)          # I + c B^T M B is SPD
+                    for i in range(3):
+                        for j in range(3):
+                            Y[l, i, j] = c * Y3[i, j]
+                    for i in range(6):
+                        for k in range(3):
+                            HY[i, k] = H[l, i, 0] * Y[l, 0, k] + H[l, i, 1] * Y[l, 1, k] + H[l, i, 2] * Y[l, 2, k]
+                    for i in range(6):
+                        for j in range(i, 6):
+                            K[i, j] -= HY[i, 0] * H[l, j, 0] + HY[i, 1] * H[l, j, 1] + HY[i, 2] * H[l, j, 2]
+            for i in range(6):
+                for j in range(i + 1, 6):
+                    K[j, i] = K[i, j]
+            if not _chol(K, Lf, 6):
+                return -1 - p
+            _chol_solve(Lf, wrench[p], t, 6)
+            if not any_hp:
+                break
+            # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
+            change = 0.0
+            for l in range(L):
+                if mode[l] == 0:
+                    continue
+                if mode[l] == 1:
+                    acc = 0.0
+                    for i in range(6):
+                        acc += E[l, i, 0] * t[i]
+                    F = abs(k1[l] * acc) * np.sqrt(b1[l])
+                else:
+                    for k in range(3):
+                        Ht[k] = H[l, 0, k] * t[0] + H[l, 1, k] * t[1] + H[l, 2, k] * t[2] + H[l, 3, k] * t[3] \
+                            + H[l, 4, k] * t[4] + H[l, 5, k] * t[5]
+                    for k in range(3):
+                        YHt[k] = Y[l, k, 0] * Ht[0] + Y[l, k, 1] * Ht[1] + Y[l, k, 2] * Ht[2]
+                    F2 = 0.0
+                    for k in range(3):
+                        fk = Ht[k] - (Q3[l, k, 0] * YHt[0] + Q3[l, k, 1] * YHt[1] + Q3[l, k, 2] * YHt[2])
+                        F2 += fk * fk
+                    F = np.sqrt(F2)
+                c_hp[l] = 0.0
+                for j in range(i_n[l, 4]):
+                    k_new = _hertz_k(max(F, hp[l, j, 2]), hp[l, j, 0], hp[l, j, 1])
+                    d = abs(k_new - kh[l, j]) / k_new
+                    if d > change:
+                        change = d
+                    kh[l, j] = k_new
+                    c_hp[l] += scale[p, l, k_hp] / k_new
+            it += 1
+            if change < _FP_TOL:
+                break
+            if it >= _FP_MAX_ITER:
+                return 1 + p
+        iters_out[p] = it + 1 if any_hp else 1
+        # ---- outputs
+        for i in range(6):
+            t_out[p, i] = t[i]
+            for j in range(6):
+                K_out[p, i, j] = K[i, j]
+        _chol_inverse(Lf, S_out[p], ev, xv, 6)
+        for l in range(L):
+            m = mm[l]
+            for j in range(i_n[l, 4] if detailed else 0):
+                kh_out[p, l, j] = kh[l, j]
+            # y = A_c^-1 E^T t (W_C = N y) and A_c^-1 (the leg stiffness N A_c^-1 N^T)
+            for a in range(m):
+                acc = 0.0
+                for i in range(6):
+                    acc += E[l, i, a] * t[i]
+                z[a] = acc
+            if mode[l] == 1:
+                Ai[0, 0] = k1[l]
+            else:
+                for a in range(m):
+                    for b in range(m):
+                        Ai[a, b] = Mi[l, a, b]
+                if mode[l] == 2:
+                    for a in range(m):
+                        for k in range(3):
+                            xv[k] = Y[l, k, 0] * X[l, a, 0] + Y[l, k, 1] * X[l, a, 1] + Y[l, k, 2] * X[l, a, 2]
+                        for b in range(m):
+                            Ai[a, b] -= X[l, b, 0] * xv[0] + X[l, b, 1] * xv[1] + X[l, b, 2] * xv[2]
+            for a in range(m):
+                acc = 0.0
+                for b in range(m):
+                    acc += Ai[a, b] * z[b]
+                yv[l, a] = acc
+            for i in range(6):
+                acc = 0.0
+                for a in range(m):
+                    acc += Nb[l, i, a] * yv[l, a]
+                WC_out[p, l, i] = acc
+            if released:
+                for i in range(6):
+                    for a in range(m):
+                        acc = 0.0
+                        for b in range(m):
+                            acc += Nb[l, i, b] * Ai[b, a]
+                        xv[a] = acc
+                    for j in range(i, 6):
+                        acc = 0.0
+                        for a in range(m):
+                            acc += xv[a] * Nb[l, j, a]
+                        KL_out[p, l, i, j] = acc
+                        KL_out[p, l, j, i] = acc
+            else:
+                for i in range(6):
+                    for j in range(6):
+                        KL_out[p, l, i, j] = Ai[i, j]
+            # complementary energy y^T A_e y per element kind (W_C^T S_e W_C)
+            for k in range(energy_out.shape[2]):
+                energy_out[p, l, k] = 0.0
+            for s in range(n_slots[l]):
+                acc = 0.0
+                for a in range(m):
+                    for b in range(m):
+                        acc += yv[l, a] * Ae[l, s, a, b] * yv[l, b]
+                energy_out[p, l, slot_kind[l, s]] += acc
+            if detailed and i_n[l, 4] > 0:
+                F2 = WC_out[p, l, 0] ** 2 + WC_out[p, l, 1] ** 2 + WC_out[p, l, 2] ** 2
+                for j in range(i_n[l, 4]):
+                    energy_out[p, l, k_hp] += F2 * scale[p, l, k_hp] / kh[l, j]
+    return 0
