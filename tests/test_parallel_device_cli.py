@@ -60,6 +60,7 @@ def test_verify_writes_tables_and_passes_check(path, tmp_path):
                                     "--check"])
     assert res.exit_code == 0, res.output
     assert "solid links" in res.output and "beam links" in res.output
+    assert "PASS" in (out / "report.html").read_text() and "every point" in (out / "report.md").read_text()
     for name, bound in (("errors_detailed.csv", 2.0), ("errors_simplified.csv", 2.0), ("errors_detailed_beam.csv", 1e-6)):
         rows = (out / name).read_text().splitlines()
         assert rows[0] == "level,joints,point,direction,analytical_mm,fe_mm,rel_error_pct"

@@ -94,6 +94,7 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
         solid = verify_device(case, labels, levels, parts="solid", mesh=mesh, progress=lambda d: bar.advance(1, d))
         beam = verify_device(case, labels, levels, progress=lambda d: bar.advance(1, d))
     failures = []
+    sections = []
     for level in levels:
         for res, suffix, parts in ((solid, "", "solid"), (beam, "_beam", "beam")):
             rows = [r for r in res.rows if r["level"] == level]
@@ -101,8 +102,10 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
             write_text_atomic(out / f"errors_{level}{suffix}.md", type(res)(rows=tuple(rows)).to_markdown())
         rows = [r for r in solid.rows if r["level"] == level]
         limit = 100 * ERROR_THRESHOLDS[level]
-        t = Table(title=f"{case.meta.name}: {level} analytical vs FE with solid links (mesh {mesh}; deflection mm "
-                        f"under {case.loads.test_N:g} N; threshold {limit:g} % mean)")
+        title = (f"{case.meta.name}: {level} analytical vs FE with solid links (mesh {mesh}; deflection mm "
+                 f"under {case.loads.test_N:g} N; threshold {limit:g} % mean)")
+        t = Table(title=title)
+        summary = []
         for c in ("joints", "direction", "points", "analytical_mm (min..max)", "mean |rel error| % (solid)",
                   "max |rel error| % (solid)", "max |rel error| % (beam)"):
             t.add_column(c, justify="right")
@@ -117,7 +120,11 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
                 t.add_row(jt, d, str(len(sel)), f"{min(a):.5f}..{max(a):.5f}", f"{mean:.3f}",
                           f"{max(abs(r['rel_error_pct']) for r in sel):.3f}",
                           f"{max(abs(r['rel_error_pct']) for r in bsel):.2e}")
+                summary.append({"joints": jt, "direction": d, "points": len(sel), "mean |error| % (solid)": mean,
+                                "max |error| % (solid)": max(abs(r["rel_error_pct"]) for r in sel),
+                                "max |error| % (beam)": max(abs(r["rel_error_pct"]) for r in bsel)})
         con.print(t)
+        sections += _report_sections(title, summary, rows, limit)
     if beam.max_abs_error_pct > VERIFY_THRESHOLD_PCT:
         failures.append(f"beam-link FE vs analytical: max |error| {beam.max_abs_error_pct:.2e} % > "
                         f"{VERIFY_THRESHOLD_PCT:g} % (the chain algebra)")
@@ -125,11 +132,39 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
               f"cantilevers (max |error| {beam.max_abs_error_pct:.2e} %, a check of the chain algebra); joints as "
               f"exact releases with the analytical drive and contact springs, rigid platform; max |error| with solid "
               f"links {solid.max_abs_error_pct:.3f} % over {len(solid.rows)} deflections; wrote "
-              f"{4 * len(levels)} files to {out}")
+              f"{4 * len(levels) + 2} files to {out} (report.html)")
+    _write_report(case, case_path, out, sections, failures, check, solid, beam, mesh)
     if check and failures:
         for f in failures:
             con.print(f"[red]{f}[/]")
         raise typer.Exit(1)
+
+
+def _report_sections(title, summary, rows, limit) -> list:
+    from femcheck.verify.render import Section
+    return [Section(title, tuple(summary), {k: "{:.3f}" if "solid" in k else "{:.2e}" for k in summary[0] if "%" in k},
+                    note=f"Mean and max over the test points of |analytical − FE| / |FE| (%); the solid-link FE must "
+                         f"stay within {limit:g} % on average (verify threshold); the beam-link FE reproduces the "
+                         "analytical cantilevers, so its error is round-off (a check of the chain algebra)."),
+            Section(title.split(":")[0] + ": every point (solid links)", tuple(rows),
+                    {"analytical_mm": "{:.5f}", "fe_mm": "{:.5f}", "rel_error_pct": "{:+.3f}"})]
+
+
+def _write_report(case, case_path, out, sections, failures, check, solid, beam, mesh) -> None:
+    """report.md / report.html: the verdict, then the tables of each level (:mod:`femcheck.verify.render`)."""
+    from femcheck.report.atomic import write_text_atomic
+    from femcheck.verify.render import VERDICT_TITLE, Section, render_html, render_markdown
+    verdict = ("FAIL: " + "; ".join(failures)) if failures else "PASS: every mean error within its threshold"
+    if not check:
+        verdict = "not checked (no --check): " + verdict
+    head = Section(VERDICT_TITLE, pre=f"{verdict}\nmax |error| solid links {solid.max_abs_error_pct:.3f} %, beam links "
+                                     f"{beam.max_abs_error_pct:.2e} % over {len(solid.rows)} deflections")
+    title = f"femcheck verify — {case.meta.name}"
+    intro = (f"case {case_path}: parallel device, {len(case.device.legs)} legs; FE from the case description with "
+             f"solid links (geometry builders, P2, condensed; mesh {mesh}) and with beam links; joints as exact "
+             "releases with the analytical drive and contact springs; rigid platform (docs/parallel_device.md).")
+    write_text_atomic(out / "report.md", render_markdown(title, intro, [head] + sections))
+    write_text_atomic(out / "report.html", render_html(title, intro, [head] + sections))
 
 
 def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out) -> None:
