@@ -49,9 +49,15 @@ class FitResult:
     on_bound: tuple[str, ...] = ()
 
     @property
+    def penalty(self) -> float:
+        """Extended-BIC term of the effects whose placement was searched (``Effect.penalty``, e.g. 2 ln C(6, k) for
+        k legs picked among 6); 0 for effects fixed before the data."""
+        return float(sum(getattr(e, "penalty", 0.0) for e in self.effects))
+
+    @property
     def bic(self) -> float:
-        """Bayesian information criterion chi^2 + k ln N (Schwarz)."""
-        return self.chi2 + self.n_params * np.log(max(self.n_data, 1))
+        """Bayesian information criterion chi^2 + k ln N (Schwarz), plus :attr:`penalty` (extended BIC)."""
+        return self.chi2 + self.n_params * np.log(max(self.n_data, 1)) + self.penalty
 
     @property
     def aic(self) -> float:
