@@ -44,7 +44,7 @@ class MatrixCase:
         return 1.0 - self.error_after / self.error_before
 
 
-def _location_match(hidden: str, truth_params: dict, diag) -> bool | None:
+def _location_match(hidden: str, truth_params: dict, diag, diag_model=None) -> bool | None:
     if not diag.causes or diag.causes[0].id != hidden:
         return None
     c = diag.causes[0]
@@ -53,6 +53,8 @@ def _location_match(hidden: str, truth_params: dict, diag) -> bool | None:
         true = sorted(int(k[3:]) for k, v in truth_params.items() if v > 1.0)
         lo = np.array([c.params_ci[f"leg{i}"][0] for i in range(6)])
         return eff.soft_legs(None, lo) == true
+    if eff.located:   # the named legs are exactly the hidden ones
+        return list(c.legs) == eff.truth_legs(truth_params, diag_model)
     if hidden == "clearance":
         true = [a for a in "xyz" if truth_params[f"gap_{a}_m"] > 0]
         lo = np.array([c.params_ci[f"gap_{a}_m"][0] for a in "xyz"])
@@ -66,13 +68,17 @@ def run_case(case, hidden: str, seed: int, directions=None) -> MatrixCase:
     from femcheck.experiment.simulate import ALL_DIRECTIONS, simulate
     from femcheck.measured import process
 
-    ve = simulate(case, [] if hidden == "none" else [(hidden, {})], seed=seed, directions=directions or ALL_DIRECTIONS)
+    model = AnalyticalChainModel(case, "detailed", "rigid")
+    if hidden != "none" and not get_effect(hidden).applicable(model):
+        model = AnalyticalChainModel(case, "simplified", "rigid")   # an effect that adds what the model lacks
+    ve = simulate(case, [] if hidden == "none" else [(hidden, {})], seed=seed, directions=directions or ALL_DIRECTIONS,
+                  level=model.level)
     readings = process(ve.data, case)
     t = time.perf_counter()
-    d = diagnose(AnalyticalChainModel(case, "detailed", "rigid"), readings, with_baseline=False)
+    d = diagnose(model, readings, with_baseline=False)
     truth = ve.truth["effects"][0]
     return MatrixCase(hidden=hidden, seed=seed, truth=truth["params"], named=tuple(c.id for c in d.causes),
-                      location=d.causes[0].location, location_match=_location_match(hidden, truth["params"], d),
+                      location=d.causes[0].location, location_match=_location_match(hidden, truth["params"], d, model),
                       error_before=d.heldout_error_before["overall"], error_after=d.heldout_error_after["overall"],
                       significant=d.significant, seconds=time.perf_counter() - t)
 

@@ -11,7 +11,8 @@ diagnosis):
 3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
    subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
    chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
-4. the subset with the lowest score is the placement of e (none if the empty one wins).
+4. the subset with the lowest score is the placement of e (none if the empty one wins, or all six legs: that is the
+   element's all-legs cause, e.g. ``actuation_compliance``, not a located one).
 
 The placements of the element types with the lowest scores (at most ``keep``) then enter the diagnosis as
 ordinary candidates: fitted with the full nonlinear model alone and in every pair, and weighed with their extended
@@ -68,7 +69,7 @@ def _lstsq(G, r):
     return b, chi2, se
 
 
-def screen_placements(model, readings, located, keep: int = 2) -> list[Placement]:
+def screen_placements(model, readings, located, keep: int = 1) -> list[Placement]:
     """The best placement of each effect of ``located`` (see module doc), best first, at most ``keep`` of them, only
     those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`."""
     if not located:
@@ -93,7 +94,7 @@ def screen_placements(model, readings, located, keep: int = 2) -> list[Placement
                 break
             legs.pop(int(np.argmin(np.abs(b / se))))
             b, chi2, se = _lstsq(G[:, legs], r0)
-        if best_legs:
+        if best_legs and len(best_legs) < 6:   # all six legs is the element's all-legs cause, not a located one
             out.append(Placement(eff.restricted(best_legs), best, chi2_0, t_full))
     out.sort(key=lambda p: p.score)
     return out[:keep]

@@ -239,7 +239,7 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
 
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
-             max_located: int = 2) -> Diagnosis:
+             max_located: int = 1) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the

@@ -109,7 +109,7 @@ def get_effect(effect_id: str) -> Effect:
 VOCABULARY = ("joint_contact_compliance", "actuation_compliance", "clearance", "hertz_stiffening", "leg_softening",
               "link_modulus", "friction_hysteresis", "sensor_misalignment", "joint_rotation_release",
               "guideway_in_legs", "actuation_in_legs", "spherical_joint_in_legs", "proximal_link_in_legs",
-              "universal_joint_in_legs", "none")
+              "universal_joint_in_legs", "missing_compliance", "none")
 #: the effects whose place (legs) is screened by the diagnosis (``femcheck.diagnose.placement``)
 LOCATED = ("guideway_in_legs", "actuation_in_legs", "spherical_joint_in_legs", "proximal_link_in_legs",
            "universal_joint_in_legs")
