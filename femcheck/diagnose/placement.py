@@ -11,13 +11,23 @@ diagnosis):
 3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
    subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
    chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
-4. the subset with the lowest score is the placement of e (none if the empty one wins, or all six legs: that is the
-   element's all-legs cause, e.g. ``actuation_compliance``, not a located one).
+4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given); a type
+   whose lowest score is at all six legs is an all-legs change (e.g. ``actuation_compliance``) and is not located;
+5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
+   (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
+   element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
+   selection, adding the leg whose linearized step lowers chi^2 most at the current point, then three Gauss-Newton
+   steps of the active legs (scales >= 0; one batched evaluation of 7 x m states each), scored by the extended BIC;
+   up to five legs (six is the element's all-legs cause, e.g. ``actuation_compliance``, not a located one), stopping
+   after three steps that do not improve the score; then backward pruning of that subset (drop the leg whose removal
+   lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
+   path can take one too many.
 
-The placements of the element types with the lowest scores (at most ``keep``) then enter the diagnosis as
-ordinary candidates: fitted with the full nonlinear model alone and in every pair, and weighed with their extended
-BIC (:attr:`ElementInLegs.penalty`). Cost: one model evaluation of 30 x the readings, then 5 x 6 small least-squares
-problems; the placements are chosen on the residual of the model as given (with another cause beside, the
+The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates: fitted with the full nonlinear model alone and in every pair, and weighed with their extended
+BIC (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points
+(a spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost:
+one model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 2-3 evaluations of 7 x the
+readings per forward step of the refined types; the placements are chosen on the residual of the model as given (with another cause beside, the
 located cause keeps that placement).
 """
 from __future__ import annotations
@@ -69,32 +79,94 @@ def _lstsq(G, r):
     return b, chi2, se
 
 
-def screen_placements(model, readings, located, keep: int = 1) -> list[Placement]:
-    """The best placement of each effect of ``located`` (see module doc), best first, at most ``keep`` of them, only
-    those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`."""
+def _state(model, readings, eff, x):
+    """Weighted residual r (N,) at leg scales ``x`` (6,) of ``eff`` and its Jacobian G (N, 6) in the six scales (one
+    batched evaluation of 7 x m states, forward differences)."""
+    m = len(readings.phase)
+    sc = np.array(np.broadcast_to(model.base_scale, (7, m, 6, 5)), float)
+    sc[:, :, :, eff.column] = x[None, None, :]
+    for i in range(6):
+        sc[i + 1, :, i, eff.column] += _STEP
+    d = model.tcp_displacement(np.tile(readings.pose, (7, 1)), np.tile(readings.force, (7, 1)),
+                               sc.reshape(7 * m, 6, 5)).reshape(7, m, 3)
+    r = ((readings.disp - d[0]) / readings.sigma).ravel()
+    G = ((d[1:] - d[0][None]) / _STEP / readings.sigma[None]).reshape(6, -1).T
+    return r, G
+
+
+def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
+    """Forward selection of legs with relinearization (see module doc, step 5): (score, legs) of the best subset."""
+    x = np.array(model.base_scale)[:, eff.column].astype(float)
+    r, G = _state(model, readings, eff, x)
+    active, best, worse, best_x = [], (score_none, ()), 0, x.copy()
+    while len(active) < 5 and worse < 3:
+        trial = []
+        for leg in set(range(6)) - set(active):
+            cols = active + [leg]
+            _, chi2, _ = _lstsq(G[:, cols], r)
+            trial.append((chi2, leg))
+        active.append(min(trial)[1])
+        for _ in range(iters):   # Gauss-Newton on the active legs, the others at the model's value
+            b, _, _ = _lstsq(G[:, active], r)
+            x[active] = np.clip(x[active] + b, 0.0, None)
+            r, G = _state(model, readings, eff, x)
+        score = ebic(float(r @ r), len(active))
+        worse = worse + 1 if score >= best[0] else 0
+        if score < best[0]:
+            best, best_x = (score, tuple(sorted(active))), x.copy()
+    while len(best[1]) > 1:   # backward pruning: neighbouring legs' elements are alike, forward may pick one too many
+        trials = []
+        for leg in best[1]:
+            keep = [i for i in best[1] if i != leg]
+            x = best_x.copy()
+            x[leg] = model.base_scale[leg, eff.column]
+            for _ in range(iters):
+                r, G = _state(model, readings, eff, x)
+                b, _, _ = _lstsq(G[:, keep], r)
+                x[keep] = np.clip(x[keep] + b, 0.0, None)
+            r, _ = _state(model, readings, eff, x)
+            trials.append((ebic(float(r @ r), len(keep)), tuple(keep), x))
+        score, legs, x = min(trials, key=lambda t: t[0])
+        if score >= best[0]:
+            break
+        best, best_x = (score, legs), x
+    return best
+
+
+def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0) -> list[Placement]:
+    """The best placement of each effect of ``located`` (see module doc), best first: those within ``margin`` of the
+    best score (at most ``keep``), only those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`."""
     if not located:
         return []
-    r0 = ((readings.disp - model.tcp_displacement(readings.pose, readings.force,
-                                                  np.array(np.broadcast_to(model.base_scale, (len(readings.phase), 6, 5))))
-           ) / readings.sigma).ravel()
+    m = len(readings.phase)
+    base = np.array(np.broadcast_to(model.base_scale, (m, 6, 5)), float)
+    r0 = ((readings.disp - model.tcp_displacement(readings.pose, readings.force, base)) / readings.sigma).ravel()
     N = r0.size
     chi2_0 = float(r0 @ r0)
+    ebic = lambda chi2, k: chi2 + k * math.log(N) + (2.0 * math.log(math.comb(6, k)) if k < 6 else 0.0)
     J = leg_jacobians(model, readings, located)
-    out = []
-    for eff, G in zip(located, J):
+    linear = []
+    for eff, G in zip(located, J):   # 1.-4. linearized backward elimination: ranks the element types
         legs = list(range(6))
         b, chi2, se = _lstsq(G, r0)
         t_full = tuple(float(x) for x in b / se)
-        best_legs, best = (), chi2_0
+        best = (chi2_0, ())
         while legs:
-            score = chi2 + len(legs) * math.log(N) + 2.0 * math.log(math.comb(6, len(legs)))
-            if score < best:
-                best_legs, best = tuple(legs), score
+            best = min(best, (ebic(chi2, len(legs)), tuple(legs)))
             if len(legs) == 1:
                 break
             legs.pop(int(np.argmin(np.abs(b / se))))
             b, chi2, se = _lstsq(G[:, legs], r0)
-        if best_legs and len(best_legs) < 6:   # all six legs is the element's all-legs cause, not a located one
-            out.append(Placement(eff.restricted(best_legs), best, chi2_0, t_full))
+        linear.append((best[0], eff, t_full, len(best[1])))
+    linear.sort(key=lambda t: t[0])
+    out = []
+    for score_lin, eff, t_full, n_legs in linear[:keep]:
+        if score_lin > linear[0][0] + margin or score_lin >= chi2_0:
+            break
+        if n_legs == 6:   # the element changed in every leg: its all-legs cause, not a located one
+            continue
+        score, legs = _forward(model, readings, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        if legs:
+            out.append(Placement(eff.restricted(legs), score, chi2_0, t_full))
     out.sort(key=lambda p: p.score)
-    return out[:keep]
+    return [p for p in out if p.score <= out[0].score + margin] if out else []
