@@ -13,6 +13,8 @@ case's closed form (seed 000 §4.4, CONVENTIONS.md §5):
 0 = the element stays absent (the model as given; no symptom on that bound), 1 = the case's formula (the detailed
 model). Applicable only to a model that lacks all three (the ``simplified`` level); on the detailed model the
 elements exist and ``actuation_compliance`` / ``joint_contact_compliance`` / the located ``*_in_legs`` scale them.
+Where it applies, those two all-legs scales do not: the pair of them is its special case (one scale for both
+joints), and as two causes they took the evidence from the one omission (measured: 0.79 against 0.19).
 """
 import numpy as np
 
