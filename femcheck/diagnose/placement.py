@@ -23,12 +23,13 @@ diagnosis):
    lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
    path can take one too many.
 
-The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates: fitted with the full nonlinear model alone and in every pair, and weighed with their extended
-BIC (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points
-(a spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost:
-one model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 2-3 evaluations of 7 x the
-readings per forward step of the refined types; the placements are chosen on the residual of the model as given (with another cause beside, the
-located cause keeps that placement).
+The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates:
+fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
+(:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
+spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
+model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
+forward or pruning step of the refined types. The placements are chosen on the residual of the model as given (in a
+pair with another cause, the located cause keeps that placement).
 """
 from __future__ import annotations
 
@@ -43,8 +44,9 @@ _STEP = 1e-3
 
 @dataclasses.dataclass(frozen=True)
 class Placement:
-    """A screened placement: ``effect`` restricted to its legs, ``score`` its linearized extended BIC, ``score_none``
-    the score of no change (chi^2 of the model as given), ``t`` the per-leg t-values of the full six-leg step."""
+    """A screened placement: ``effect`` restricted to its legs, ``score`` its extended BIC after the nonlinear leg
+    selection (step 5), ``score_none`` the score of no change (chi^2 of the model as given), ``t`` the per-leg
+    t-values of the linear six-leg step (step 2)."""
 
     effect: object
     score: float
