@@ -11,6 +11,8 @@ Figures:
   magnitude and place, ``SEEDS`` seeds) whose first named cause is the hidden one;
 * ``same_model_unexplained_rate``: share of those that get ``unexplained`` (false alarms);
 * ``noise_6um_unexplained_rate``: the same single-effect sets with twice the case's noise;
+* ``diagnose_9pt_located_s``, ``located_two_legs_named_right``: the same protocol with the drive 1.8x softer in
+  legs 0 and 3 (issue 15 item 3): time, and 1 if the one cause named is ``actuation_in_legs`` in legs 0 and 3;
 * ``plan_wall_s``: wall time of ``femcheck plan``'s work on the timed dataset above (the diagnosis with every pair,
   then :func:`femcheck.diagnose.plan.plan_measurements`, budget 3, 120 sampled poses); ``plan_only_s`` the plan
   step alone, ``plan_candidates`` the number of candidate measurements it weighs.
@@ -28,7 +30,7 @@ DIRS = ("+x", "+y", "+z")
 
 def run() -> dict:
     from femcheck.diagnose import AnalyticalChainModel, diagnose
-    from femcheck.diagnose.effects import VOCABULARY
+    from femcheck.diagnose.effects import VOCABULARY, get_effect
     from femcheck.experiment.foreign import FOREIGN, simulate_foreign
     from femcheck.experiment.simulate import simulate
     from femcheck.measured import process
@@ -39,7 +41,13 @@ def run() -> dict:
     t0 = time.perf_counter()
     d = diagnose(model, r, with_baseline=False)
     t_all = time.perf_counter() - t0
-    out = {"diagnose_9pt_all_pairs_s": round(t_all, 2)}
+    out = {"diagnose_9pt_all_pairs_s": round(t_all, 2), "diagnose_9pt_candidates": len(d.weighing.explanations)}
+    # issue 15 item 3: two legs whose drive is 1.8x softer, same protocol: named as actuation in exactly those legs
+    rl = process(simulate(case, [("actuation_in_legs", {"leg0": 1.8, "leg3": 1.8})], seed=1).data, case)
+    t0 = time.perf_counter()
+    dl = diagnose(model, rl, with_baseline=False)
+    out["diagnose_9pt_located_s"] = round(time.perf_counter() - t0, 2)
+    out["located_two_legs_named_right"] = int([(c.id, c.legs) for c in dl.causes] == [("actuation_in_legs", (0, 3))])
     from femcheck.diagnose.plan import plan_measurements
     t1 = time.perf_counter()
     p = plan_measurements(model, r, d.weighing, budget=3)
@@ -57,8 +65,10 @@ def run() -> dict:
             if eid == "none":
                 continue
             for s in range(SEEDS):
-                rr = process(simulate(case, [(eid, {})], seed=200 + s, directions=DIRS, noise_sigma_m=sigma).data, case)
-                d = diagnose(model, rr, with_baseline=False)
+                m = model if get_effect(eid).applicable(model) else AnalyticalChainModel(case, "simplified", "rigid")
+                rr = process(simulate(case, [(eid, {})], seed=200 + s, directions=DIRS, noise_sigma_m=sigma,
+                                      level=m.level).data, case)
+                d = diagnose(m, rr, with_baseline=False)
                 right += d.causes[0].id == eid
                 unexpl += d.verdict == "unexplained"
                 n += 1

@@ -49,9 +49,15 @@ class FitResult:
     on_bound: tuple[str, ...] = ()
 
     @property
+    def penalty(self) -> float:
+        """Extended-BIC term of the effects whose placement was searched (``Effect.penalty``, e.g. 2 ln C(6, k) for
+        k legs picked among 6); 0 for effects fixed before the data."""
+        return float(sum(getattr(e, "penalty", 0.0) for e in self.effects))
+
+    @property
     def bic(self) -> float:
-        """Bayesian information criterion chi^2 + k ln N (Schwarz)."""
-        return self.chi2 + self.n_params * np.log(max(self.n_data, 1))
+        """Bayesian information criterion chi^2 + k ln N (Schwarz), plus :attr:`penalty` (extended BIC)."""
+        return self.chi2 + self.n_params * np.log(max(self.n_data, 1)) + self.penalty
 
     @property
     def aic(self) -> float:
@@ -159,7 +165,8 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
                 warnings.append(f"{names[a]} and {names[b]} are nearly collinear (corr {c:+.3f}): the data "
                                 f"pin down a combination, not each")
     on_bound = tuple(names[j] for j, p in enumerate(params) if not free[j]
-                     and not (p.neutral is not None and np.isclose(vals[j], p.neutral, rtol=1e-6, atol=1e-12)))
+                     and not (p.neutral is not None and np.isclose(vals[j], p.neutral, rtol=1e-6,
+                                                                   atol=1e-6 * (p.upper - p.lower))))
     for n in on_bound:
         # a parameter pinned to its bound is not a finding: the effect stands in for something it cannot express
         warnings.append(f"{n} sits on its bound: a symptom of a missing explanation, not a finding")

@@ -29,6 +29,7 @@ import numpy as np
 from femcheck.diagnose import evidence, residuals
 from femcheck.diagnose.effects import effects as effect_registry
 from femcheck.diagnose.fitting import FitResult, fit_effects
+from femcheck.diagnose.placement import screen_placements
 
 log = logging.getLogger(__name__)
 
@@ -57,10 +58,16 @@ class Cause:
 
     probability: float = 1.0
     on_bound: tuple[str, ...] = ()
+    #: for a located cause (``<element>_in_legs``): the element type and the legs it sits in
+    element: str = ""
+    legs: tuple[int, ...] = ()
 
     def as_dict(self) -> dict:
-        return {"id": self.id, "probability": self.probability, "location": self.location, "params": self.params,
-                "params_ci": self.params_ci, "on_bound": list(self.on_bound)}
+        out = {"id": self.id, "probability": self.probability, "location": self.location, "params": self.params,
+               "params_ci": self.params_ci, "on_bound": list(self.on_bound)}
+        if self.element:
+            out.update(element=self.element, legs=list(self.legs))
+        return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +89,8 @@ class Diagnosis:
     baseline_error: dict | None = None
     readings: object = dataclasses.field(default=None, repr=False)
     weighing: object = dataclasses.field(default=None, repr=False)
+    #: screened placements of the located effects that joined the candidates (``femcheck.diagnose.placement``)
+    placements: tuple = ()
 
     @property
     def verdict(self) -> str:
@@ -170,7 +179,9 @@ class Diagnosis:
                 "noise_threshold_chi2": self.noise_threshold,
                 "baseline_weight_fit_heldout_error": self.baseline_error,
                 "folds": [list(f) for f in self.folds], "warnings": list(self.warnings),
-                "steps": list(self.steps)}
+                "steps": list(self.steps),
+                "placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
+                                "screen_ebic_none": p.score_none, "t_per_leg": list(p.t)} for p in self.placements]}
 
 
 def point_folds(readings, n_folds: int = 3) -> tuple[tuple[str, ...], ...]:
@@ -196,36 +207,53 @@ def cross_validate(model, readings, effects, full: FitResult, folds) -> CrossVal
                            error_along=residuals.mean_by_axis(readings, err["along"]))
 
 
-def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True) -> list:
+def _explanation(f: FitResult) -> evidence.Explanation:
+    return evidence.Explanation(f.ids, f.chi2, f.n_params, f, penalty=f.penalty)
+
+
+def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, known=None) -> list:
     """Every rival explanation: none, each single effect of ``pool`` and (``pairs``) each pair, as
-    :class:`~femcheck.diagnose.evidence.Explanation` with the :class:`FitResult` as payload. Pairs start from the
-    two singles' fitted values (one start, at most 100 evaluations)."""
+    :class:`~femcheck.diagnose.evidence.Explanation` with the :class:`FitResult` as payload (and the extended-BIC
+    penalty of located effects). Pairs start from the two singles' fitted values (one start, at most 100
+    evaluations). ``known``: {frozenset of ids: FitResult} of fits already made with these effects (the greedy
+    selection's rounds, several starts), reused instead of refitted."""
+    known = known or {}
     out = [evidence.Explanation((), base.chi2, 0, base)]
     singles = {}
     for eff in pool:
-        f = fit_effects(model, readings, [eff])
+        f = known.get(frozenset([eff.id])) or fit_effects(model, readings, [eff])
         singles[eff.id] = f
-        out.append(evidence.Explanation(f.ids, f.chi2, f.n_params, f))
+        out.append(_explanation(f))
     if pairs:
         for i, first in enumerate(pool):
             for second in pool[i + 1:]:
-                # order the pair by the singles' fit: the better single first
-                a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
-                start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
-                f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100)
-                out.append(evidence.Explanation(f.ids, f.chi2, f.n_params, f))
+                f = known.get(frozenset([first.id, second.id]))
+                if f is None:
+                    # order the pair by the singles' fit: the better single first
+                    a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
+                    start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
+                    f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100)
+                out.append(_explanation(f))
     return out
 
 
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
-             bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True) -> Diagnosis:
-    """Name the effects that explain ``readings`` beyond ``model`` (see module docstring)."""
+             bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
+             max_located: int = 1) -> Diagnosis:
+    """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
+    (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
+    (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
+    candidates."""
     if readings.n_cases == 0 or len(set(readings.case_point)) < 2:
         from femcheck.errors import MeasuredDataError
         raise MeasuredDataError(readings.source, None, "point", "a diagnosis needs preload and total readings at two or "
                                 "more points (leave-points-out cross-validation)")
     reg = effect_registry()
-    pool = [reg[c] for c in (candidates or sorted(reg)) if c != "none" and reg[c].applicable(model)]
+    chosen_ids = [c for c in (candidates or sorted(reg)) if c != "none" and reg[c].applicable(model)]
+    pool = [reg[c] for c in chosen_ids if not reg[c].located]
+    located = [reg[c] for c in chosen_ids if reg[c].located]
+    placements = screen_placements(model, readings, located, keep=max_located) if located and max_located > 0 else []
+    pool += [p.effect for p in placements]
     folds = point_folds(readings, n_folds)
     base = fit_effects(model, readings, [])
     cv_base = cross_validate(model, readings, [], base, folds)
@@ -233,6 +261,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     threshold = 2.0 * np.sqrt(2.0 * n_total)
     chosen, cur_fit, cur_cv = [], base, cv_base
     steps = []
+    known = {}
     for rnd in range(max_effects):
         fits = []
         for eff in pool:
@@ -243,6 +272,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                 prev = np.concatenate(cur_fit.values)
                 starts = [np.concatenate([prev, s]) for s in eff.starts(model)]
             fits.append(fit_effects(model, readings, chosen + [eff], starts=starts))
+            known[frozenset(fits[-1].ids)] = fits[-1]
         fits.sort(key=lambda f: f.bic)
         rows = [{"round": rnd + 1, "effects": list(f.ids), "chi2": f.chi2, "bic": f.bic, "delta_bic": cur_fit.bic - f.bic}
                 for f in fits]
@@ -269,13 +299,13 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                  "+".join(e.id for e in chosen))
         chosen, cur_fit, cur_cv = [], base, cv_base
     # issue 15: weigh every rival (none, singles, pairs up to max_effects) by BIC evidence; the leader is the answer
-    rivals = fit_rivals(model, readings, pool, base, pairs=max_effects >= 2 and rivals_pairs)
+    rivals = fit_rivals(model, readings, pool, base, pairs=max_effects >= 2 and rivals_pairs, known=known)
     greedy_ids = tuple(e.id for e in chosen)
     for ex in rivals:   # the greedy fit (joint, several starts) is at least as good as the warm-started rival
         if set(ex.ids) == set(greedy_ids) and ex.chi2 > cur_fit.chi2:
-            rivals[rivals.index(ex)] = evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit)
+            rivals[rivals.index(ex)] = _explanation(cur_fit)
     if not any(set(ex.ids) == set(greedy_ids) for ex in rivals):   # e.g. three effects named
-        rivals.append(evidence.Explanation(cur_fit.ids, cur_fit.chi2, cur_fit.n_params, cur_fit))
+        rivals.append(_explanation(cur_fit))
     # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
     w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
     if greedy_ids and w.probability[0] < 0.01:
@@ -300,7 +330,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     marg = {e.id: min(1.0, float(sum(p for ids, p in prob.items() if e.id in ids))) for e in chosen}
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
                          params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
-                         on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")))
+                         on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")),
+                         element=getattr(e, "element", "") if e.located else "", legs=tuple(getattr(e, "legs", ())))
                    for i, e in enumerate(chosen))
     if not causes:
         causes = (Cause(id="none", location="", params={}, params_ci={}, probability=float(p_lead)),)
@@ -315,4 +346,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     return Diagnosis(model_name=model.name, causes=causes, significant=bool(chosen), base=base, fit=cur_fit,
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
-                     readings=readings, weighing=w)
+                     readings=readings, weighing=w, placements=tuple(placements))

@@ -45,6 +45,11 @@ class Effect:
     def neutral(self, model) -> np.ndarray:
         return np.array([p.start for p in self.params])
 
+    #: extra -2 ln prior of an effect whose placement the diagnosis searched (see ``_located``); 0 when fixed
+    penalty: float = 0.0
+    #: True for the ``<element>_in_legs`` family, whose legs are screened (``femcheck.diagnose.placement``)
+    located: bool = False
+
     def applicable(self, model) -> bool:
         return True
 
@@ -102,4 +107,9 @@ def get_effect(effect_id: str) -> Effect:
 
 
 VOCABULARY = ("joint_contact_compliance", "actuation_compliance", "clearance", "hertz_stiffening", "leg_softening",
-              "link_modulus", "friction_hysteresis", "sensor_misalignment", "joint_rotation_release", "none")
+              "link_modulus", "friction_hysteresis", "sensor_misalignment", "joint_rotation_release",
+              "guideway_in_legs", "actuation_in_legs", "spherical_joint_in_legs", "proximal_link_in_legs",
+              "universal_joint_in_legs", "missing_compliance", "none")
+#: the effects whose place (legs) is screened by the diagnosis (``femcheck.diagnose.placement``)
+LOCATED = ("guideway_in_legs", "actuation_in_legs", "spherical_joint_in_legs", "proximal_link_in_legs",
+           "universal_joint_in_legs")

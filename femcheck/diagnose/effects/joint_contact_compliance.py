@@ -17,6 +17,12 @@ class JointContactCompliance(Effect):
     stage = 1
     params = (Param("scale", 0.0, 30.0, 1.0, doc="joint compliance / modelled contact compliance"),)
 
+    def applicable(self, model):
+        # on a level that lacks the drive and the joints (simplified) their omission is one cause,
+        # ``missing_compliance``, whose special cases this scale and its partner would otherwise split
+        from femcheck.diagnose.effects import get_effect
+        return not get_effect("missing_compliance").applicable(model)
+
     def neutral(self, model):
         return np.array([float(model.base_scale[0, SP])])
 

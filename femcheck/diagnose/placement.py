@@ -1,0 +1,174 @@
+"""Where a located cause sits: which legs of an element type (issue 15 item 3), found without trying every subset.
+
+For each element type e (an :class:`~femcheck.diagnose.effects._located.ElementInLegs` effect) the 2^6 - 1 leg
+subsets are not fitted one by one. Instead (the screening of Chen & Chen's extended BIC, as in the serial-robot
+diagnosis):
+
+1. **Linearize** the readings in the six per-leg scales of e at the model as given: one batched model evaluation
+   of all element types x legs x states, forward differences, G (N, 6) = d(prediction / sigma) / d leg_i;
+2. **per-leg factors**: the weighted least-squares step b = argmin |r0 - G b|^2 on the residual of the model as
+   given r0 = (measured - model) / sigma, with standard errors from s^2 (G^T G)^-1, s^2 = max(1, chi^2 / (N - k));
+3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
+   subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
+   chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
+4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given); a type
+   whose lowest score is at all six legs is an all-legs change (e.g. ``actuation_compliance``) and is not located;
+5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
+   (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
+   element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
+   selection, adding the leg whose linearized step lowers chi^2 most at the current point, then three Gauss-Newton
+   steps of the active legs (scales >= 0; one batched evaluation of 7 x m states each), scored by the extended BIC;
+   up to five legs (six is the element's all-legs cause, e.g. ``actuation_compliance``, not a located one), stopping
+   after three steps that do not improve the score; then backward pruning of that subset (drop the leg whose removal
+   lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
+   path can take one too many.
+
+The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates:
+fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
+(:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
+spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
+model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
+forward or pruning step of the refined types. The placements are chosen on the residual of the model as given (in a
+pair with another cause, the located cause keeps that placement).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+#: forward-difference step of a leg's element scale (the model is smooth in it; the scales are O(1))
+_STEP = 1e-3
+
+
+@dataclasses.dataclass(frozen=True)
+class Placement:
+    """A screened placement: ``effect`` restricted to its legs, ``score`` its extended BIC after the nonlinear leg
+    selection (step 5), ``score_none`` the score of no change (chi^2 of the model as given), ``t`` the per-leg
+    t-values of the linear six-leg step (step 2)."""
+
+    effect: object
+    score: float
+    score_none: float
+    t: tuple[float, ...]
+
+
+def leg_jacobians(model, readings, located) -> np.ndarray:
+    """(n_effects, N, 6) weighted Jacobian of every reading (N = 3 m, axes fastest) in the six per-leg scales of
+    each effect of ``located``, at the model as given (one batched evaluation of len(located) x 6 x m states)."""
+    m = len(readings.phase)
+    base = np.array(np.broadcast_to(model.base_scale, (m, 6, 5)), float)
+    d0 = model.tcp_displacement(readings.pose, readings.force, base)
+    n = len(located)
+    scale = np.broadcast_to(base, (n, 6, m, 6, 5)).copy()
+    for a, eff in enumerate(located):
+        for i in range(6):
+            scale[a, i, :, i, eff.column] += _STEP
+    d = model.tcp_displacement(np.tile(readings.pose, (n * 6, 1)), np.tile(readings.force, (n * 6, 1)),
+                               scale.reshape(n * 6 * m, 6, 5))
+    J = (d.reshape(n, 6, m, 3) - d0[None, None]) / _STEP / readings.sigma[None, None]
+    return J.reshape(n, 6, 3 * m).transpose(0, 2, 1)
+
+
+def _lstsq(G, r):
+    """Least-squares step, chi^2 after it and the standard errors (s^2 inflated when the fit is worse than noise)."""
+    b, *_ = np.linalg.lstsq(G, r, rcond=None)
+    res = r - G @ b
+    chi2 = float(res @ res)
+    s2 = max(1.0, chi2 / max(len(r) - G.shape[1], 1))
+    se = np.sqrt(np.clip(np.diag(s2 * np.linalg.pinv(G.T @ G)), 1e-300, None))
+    return b, chi2, se
+
+
+def _state(model, readings, eff, x):
+    """Weighted residual r (N,) at leg scales ``x`` (6,) of ``eff`` and its Jacobian G (N, 6) in the six scales (one
+    batched evaluation of 7 x m states, forward differences)."""
+    m = len(readings.phase)
+    sc = np.array(np.broadcast_to(model.base_scale, (7, m, 6, 5)), float)
+    sc[:, :, :, eff.column] = x[None, None, :]
+    for i in range(6):
+        sc[i + 1, :, i, eff.column] += _STEP
+    d = model.tcp_displacement(np.tile(readings.pose, (7, 1)), np.tile(readings.force, (7, 1)),
+                               sc.reshape(7 * m, 6, 5)).reshape(7, m, 3)
+    r = ((readings.disp - d[0]) / readings.sigma).ravel()
+    G = ((d[1:] - d[0][None]) / _STEP / readings.sigma[None]).reshape(6, -1).T
+    return r, G
+
+
+def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
+    """Forward selection of legs with relinearization (see module doc, step 5): (score, legs) of the best subset."""
+    x = np.array(model.base_scale)[:, eff.column].astype(float)
+    r, G = _state(model, readings, eff, x)
+    active, best, worse, best_x = [], (score_none, ()), 0, x.copy()
+    while len(active) < 5 and worse < 3:
+        trial = []
+        for leg in set(range(6)) - set(active):
+            cols = active + [leg]
+            _, chi2, _ = _lstsq(G[:, cols], r)
+            trial.append((chi2, leg))
+        active.append(min(trial)[1])
+        for _ in range(iters):   # Gauss-Newton on the active legs, the others at the model's value
+            b, _, _ = _lstsq(G[:, active], r)
+            x[active] = np.clip(x[active] + b, 0.0, None)
+            r, G = _state(model, readings, eff, x)
+        score = ebic(float(r @ r), len(active))
+        worse = worse + 1 if score >= best[0] else 0
+        if score < best[0]:
+            best, best_x = (score, tuple(sorted(active))), x.copy()
+    while len(best[1]) > 1:   # backward pruning: neighbouring legs' elements are alike, forward may pick one too many
+        trials = []
+        for leg in best[1]:
+            keep = [i for i in best[1] if i != leg]
+            x = best_x.copy()
+            x[leg] = model.base_scale[leg, eff.column]
+            for _ in range(iters):
+                r, G = _state(model, readings, eff, x)
+                b, _, _ = _lstsq(G[:, keep], r)
+                x[keep] = np.clip(x[keep] + b, 0.0, None)
+            r, _ = _state(model, readings, eff, x)
+            trials.append((ebic(float(r @ r), len(keep)), tuple(keep), x))
+        score, legs, x = min(trials, key=lambda t: t[0])
+        if score >= best[0]:
+            break
+        best, best_x = (score, legs), x
+    return best
+
+
+def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0) -> list[Placement]:
+    """The best placement of each effect of ``located`` (see module doc), best first: those within ``margin`` of the
+    best score (at most ``keep``), only those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`."""
+    if not located:
+        return []
+    m = len(readings.phase)
+    base = np.array(np.broadcast_to(model.base_scale, (m, 6, 5)), float)
+    r0 = ((readings.disp - model.tcp_displacement(readings.pose, readings.force, base)) / readings.sigma).ravel()
+    N = r0.size
+    chi2_0 = float(r0 @ r0)
+    ebic = lambda chi2, k: chi2 + k * math.log(N) + (2.0 * math.log(math.comb(6, k)) if k < 6 else 0.0)
+    J = leg_jacobians(model, readings, located)
+    linear = []
+    for eff, G in zip(located, J):   # 1.-4. linearized backward elimination: ranks the element types
+        legs = list(range(6))
+        b, chi2, se = _lstsq(G, r0)
+        t_full = tuple(float(x) for x in b / se)
+        best = (chi2_0, ())
+        while legs:
+            best = min(best, (ebic(chi2, len(legs)), tuple(legs)))
+            if len(legs) == 1:
+                break
+            legs.pop(int(np.argmin(np.abs(b / se))))
+            b, chi2, se = _lstsq(G[:, legs], r0)
+        linear.append((best[0], eff, t_full, len(best[1])))
+    linear.sort(key=lambda t: t[0])
+    out = []
+    for score_lin, eff, t_full, n_legs in linear[:keep]:
+        if score_lin > linear[0][0] + margin or score_lin >= chi2_0:
+            break
+        if n_legs == 6:   # the element changed in every leg: its all-legs cause, not a located one
+            continue
+        score, legs = _forward(model, readings, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        if legs:
+            out.append(Placement(eff.restricted(legs), score, chi2_0, t_full))
+    out.sort(key=lambda p: p.score)
+    return [p for p in out if p.score <= out[0].score + margin] if out else []

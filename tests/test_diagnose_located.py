@@ -1,0 +1,132 @@
+"""Causes with a place and causes that add what the model lacks (issue 15 item 3).
+
+The default suite runs the cheap checks and the issue's two-leg case (one diagnosis); the slow ones add whole-leg
+softening, random omitted scales and the FE storyline (the default storyline test is in test_diagnose_selection.py).
+Each test draws its own variety (legs, magnitudes, seeds) from a seeded generator, so that a fixed lucky draw cannot
+pass it; tolerances and their reasons are stated at each assertion.
+"""
+import math
+
+import numpy as np
+import pytest
+
+import femcheck
+from femcheck.chain import ChainAdjustments, evaluate
+from femcheck.diagnose import AnalyticalChainModel, diagnose
+from femcheck.diagnose.effects import LOCATED, get_effect
+from femcheck.diagnose.model import ACT, predict_readings
+from femcheck.diagnose.placement import screen_placements
+from femcheck.experiment.simulate import simulate
+from femcheck.measured import process
+
+FAST_DIRECTIONS = ("+x", "+y", "+z")
+
+
+@pytest.fixture(scope="module")
+def case():
+    return femcheck.load_case("cases/haptic_6psu.toml")
+
+
+@pytest.fixture(scope="module")
+def model(case):
+    return AnalyticalChainModel(case, "detailed", "rigid")
+
+
+def test_located_effect_scales_only_its_legs(case, model):
+    """The restricted effect equals the chain evaluated with that element's scale changed in those legs only."""
+    rng = np.random.default_rng(1)
+    legs = sorted(rng.choice(6, size=2, replace=False).tolist())
+    f = rng.uniform(1.5, 3.0, size=2)
+    r = process(simulate(case, [], seed=3, directions=FAST_DIRECTIONS).data, case)
+    got = predict_readings(model, r, [get_effect("actuation_in_legs").restricted(legs)], [f])
+    scale = np.ones((len(r.phase), 6, 5))
+    scale[:, legs, ACT] = f
+    W = np.zeros((len(r.phase), 6))
+    W[:, :3] = r.force
+    ref = evaluate(case, r.pose, W, model="detailed", joints="rigid",
+                   adjust=ChainAdjustments(element_scale=scale)).twist[:, :3]
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-18)   # same chain, same scales: rounding only
+
+
+def test_placement_penalty_is_the_extended_bic_term():
+    """Chen & Chen's 2 ln C(p, k) for k legs among p = 6; all six legs is a fixed model (0)."""
+    eff = get_effect("spherical_joint_in_legs")
+    for k in range(1, 7):
+        assert eff.restricted(range(k)).penalty == pytest.approx(2 * math.log(math.comb(6, k)) if k < 6 else 0.0)
+
+
+def test_screening_finds_the_hidden_element_and_legs(case, model):
+    """Random element type (actuation, guideway, proximal link: not alike at the TCP), 1-2 random legs, a factor
+    U(1.8, 3): the screened placement of the hidden type names exactly those legs and ranks first."""
+    rng = np.random.default_rng(2026)
+    for k, eid in enumerate(("actuation_in_legs", "guideway_in_legs", "proximal_link_in_legs")):
+        legs = sorted(rng.choice(6, size=int(rng.integers(1, 3)), replace=False).tolist())
+        f = float(rng.uniform(1.8, 3.0))
+        r = process(simulate(case, [(eid, {f"leg{i}": f for i in legs})], seed=40 + k, directions=FAST_DIRECTIONS).data,
+                    case)
+        p = screen_placements(model, r, [get_effect(i) for i in LOCATED])
+        assert p[0].effect.id == eid and list(p[0].effect.legs) == legs, (eid, legs, f, [(q.effect.id, q.effect.legs) for q in p])
+
+
+def test_actuation_softer_in_two_random_legs_is_named_with_its_legs(case, model):
+    """The issue's case: two legs whose actuation is 1.8x softer came back as leg_softening plus a spurious
+    link_modulus x 1.19. Now: one cause, actuation in exactly those legs, factors within 5 % of 1.8."""
+    rng = np.random.default_rng(15)
+    legs = sorted(rng.choice(6, size=2, replace=False).tolist())
+    seed = int(rng.integers(100, 1000))
+    r = process(simulate(case, [("actuation_in_legs", {f"leg{i}": 1.8 for i in legs})], seed=seed,
+                         directions=FAST_DIRECTIONS).data, case)
+    d = diagnose(model, r, with_baseline=False)
+    assert d.verdict == "explained", (d.verdict, [c.id for c in d.causes])
+    assert [c.id for c in d.causes] == ["actuation_in_legs"], [(c.id, c.location) for c in d.causes]
+    c = d.causes[0]
+    assert list(c.legs) == legs and c.element == "act"
+    assert c.probability > 0.9   # nothing else in the vocabulary fits these data within noise
+    for i in legs:   # 3 um noise on ~50 um deflections through 0.01 mm dials: a few % on the factor
+        assert c.params[f"leg{i}"] == pytest.approx(1.8, rel=0.05)
+        lo, hi = c.params_ci[f"leg{i}"]
+        assert lo - 0.02 < 1.8 < hi + 0.02
+    js = d.as_json()["causes"][0]
+    assert js["legs"] == legs and js["element"] == "act" and js["location"].endswith(", ".join(map(str, legs)))
+
+
+@pytest.mark.slow
+def test_whole_leg_softening_is_not_taken_for_one_element(case, model):
+    """A whole leg softer (all five elements) stays leg_softening: no single element type reproduces it."""
+    rng = np.random.default_rng(7)
+    leg = int(rng.integers(0, 6))
+    f = float(rng.uniform(2.5, 4.0))
+    r = process(simulate(case, [("leg_softening", {f"leg{leg}": f})], seed=int(rng.integers(1000)),
+                         directions=FAST_DIRECTIONS).data, case)
+    d = diagnose(model, r, with_baseline=False)
+    assert d.causes[0].id == "leg_softening" and d.causes[0].location == f"legs {leg}", \
+        [(c.id, c.location) for c in d.causes]
+
+
+@pytest.mark.slow
+def test_fe_device_against_the_simplified_model_names_the_missing_compliance(case):
+    """The paper's storyline on FE-made data (device FE with frictional contact joints, beam parts, coarse mesh):
+    the simplified model lacks the drive and the joints; the diagnosis adds them (missing_compliance) instead of a
+    stand-in on its bound (issue 15: actuation_compliance + clearance on its closing-force bound)."""
+    from femcheck.diagnose.fe_model import DeviceFEReadingModel
+    from femcheck.kinematics.psu6 import POINT_LABELS
+    from femcheck.verify.fe import run_fe
+    fe = DeviceFEReadingModel(case, run_fe(case, POINT_LABELS, ("detailed",), "coarse", jobs=1, kind="beam"))
+    r = process(simulate(case, [], seed=int(np.random.default_rng(4).integers(1000)), model=fe,
+                         directions=FAST_DIRECTIONS).data, case)
+    d = diagnose(AnalyticalChainModel(case, "simplified", "rigid"), r, with_baseline=False)
+    assert d.causes[0].id == "missing_compliance", [(c.id, c.location, c.on_bound) for c in d.causes]
+    assert not any(c.on_bound for c in d.causes) and "clearance" not in [c.id for c in d.causes]
+    # the added elements take the error from tens of percent to a few (the FE's contact law is not the chain's)
+    assert d.heldout_error_before["overall"] > 0.3 and d.heldout_error_after["overall"] < 0.1
+
+
+@pytest.mark.slow
+def test_random_omitted_compliance_is_added_back(case):
+    """Data from the simplified model plus drive and joints at random scales U(0.7, 1.5) of their formulas: the
+    diagnosis against the simplified model names the one omission, missing_compliance, and recovers the drive."""
+    from femcheck.bench.hidden_effects import run_case
+    seed = int(np.random.default_rng(33).integers(10_000))
+    r = run_case(case, "missing_compliance", seed=seed, directions=FAST_DIRECTIONS)
+    assert r.named[:1] == ("missing_compliance",), (r.named, r.truth)
+    assert r.drop >= 0.5, (r.error_before, r.error_after)   # acceptance of issue 7: held-out error at least halved
