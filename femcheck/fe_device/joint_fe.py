@@ -102,7 +102,8 @@ def _mesh_size(case, joint: str, mesh: str) -> float:
 
 
 def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float = 100.0,
-                friction: float | None = None, max_load_N: float | None = None) -> CondensedJoint:
+                friction: float | None = None, max_load_N: float | None = None,
+                mesh_options: dict | None = None) -> CondensedJoint:
     """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ.
 
     ``max_load_N``: the largest load the joint will carry; the ball-in-seat candidates are then the
@@ -119,7 +120,7 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
     if joint == "spherical":
         from geometry import spherical_joint
         sj = case.spherical_joint
-        pm = spherical_joint.build(case, size)
+        pm = spherical_joint.build(case, size, **(mesh_options or {}))
         mats = {"ball": sj.ball_material, "seat": sj.seat_material}
         mu = case.solid.spherical_joint.friction if friction is None else friction
         held, coupled, pairs_spec = "sj_seat_mount", "sj_ball_link", [("sj_seat_contact", "sj_ball_contact", sj.seat_material)]
@@ -155,6 +156,8 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
         pr = pair_surfaces(basis, sf, mf, penalty_n=eps, friction=mu, name=slave, ndof=ndof)
         pairs.append(pr)
         h_c = min(h_c, float(np.min(mat.E_Pa * penalty_factor / eps)))
+    if joint == "spherical":
+        pairs = [_exact_sphere_gap(case, p) for p in pairs]
     _check_gaps(joint, pairs, clearance, h_c)
     # universal joint pushed along +z by the link: the link bore (a2) closes on its first-contact line,
     # the cross lifts and the platform bore (a1) closes on its opposite line (across 2c)
@@ -166,6 +169,27 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
     return CondensedJoint(joint, S, tuple(red_pairs), ref_r, int(basis.N), nfree, nret, time.perf_counter() - t0,
                           clearance, h_c, nfac, int(sum(c.sum() for c in cand)), int(sum(p.n_points for p in pairs)),
                           recover, tuple(pairs))
+
+
+def _exact_sphere_gap(case, pair):
+    """The pair with its initial gaps measured to the exact ball (and cup) surface instead of the straight
+    facets: g0 = |x_s| − R_b at each slave point x_s (ball centre at the origin), x_s projected onto the
+    socket's cup sphere first where the seat is a socket (the flat seat is exact).
+
+    Why: the mesh geometry is linear (P1 facets, P2 displacements), so a facet of edge e on the ball is off
+    the sphere by up to its sagitta e² / (8 R_b) (0.35 µm at e = a/4). Measured to the facets, the gaps in
+    the Hertz patch ripple by that much and GPTS closes only the Gauss points near the facet corners (a
+    third of the patch at a/4, the rest open by up to 0.26 µm): the stick state then sticks a subset that
+    changes with the mesh. The displacement operators are unchanged (P2 on the facets)."""
+    so = case.solid.spherical_joint
+    R = float(case.spherical_joint.ball_radius_m)
+    x = np.asarray(pair.points, float)
+    if so.seat == "socket":
+        cc = np.array([0.0, 0.0, float(so.socket_clearance_m)])
+        rs = R + float(so.socket_clearance_m)
+        d = x - cc
+        x = cc + rs * d / np.linalg.norm(d, axis=1)[:, None]
+    return dataclasses.replace(pair, g0=np.linalg.norm(x, axis=1) - R)
 
 
 def _check_gaps(joint: str, pairs, clearance: float, h_c: float) -> None:
@@ -339,6 +363,7 @@ class JointResponse:
     stabilized_iterations: int = 0
     stabilization_force_share: float = 0.0
     residual_rel: float = 0.0
+    low_rank_updates: int = 0
 
     @property
     def fe_compliance(self) -> np.ndarray:
@@ -359,11 +384,14 @@ class JointResponse:
 
 
 def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -1.0, *,
-                penetration_tol: float, max_iter: int = 100) -> JointResponse:
+                penetration_tol: float, max_iter: int = 100, initial_gap_m: float | None = None,
+                area_gap_rel: float = 1e-3) -> JointResponse:
     """Press node b along ∓z (``axis_sign``) with the eq. 1 force levels and measure its compliances.
 
     ``penetration_tol`` (m): largest penetration accepted by the augmented Lagrangian (choose ≪ the
-    approach at the smallest load, e.g. 1e-3 of the analytical one)."""
+    approach at the smallest load, e.g. 1e-3 of the analytical one); ``initial_gap_m``: the points whose
+    initial gap is below it start closed (ball in seat: half the Hertz approach at the preload, i.e. the
+    Hertz patch r ≤ a(F_5)); ``None``: the points within the clearance."""
     from femcheck.fe.contact.condensed_solver import solve_condensed_contact
 
     t0 = time.perf_counter()
@@ -393,7 +421,7 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
 
     # Hertz-predicted active set: every candidate point within the clearance (plus a tiny margin) starts
     # closed (the candidates are the loaded lines only, :func:`_candidates`)
-    closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m
+    closure = model.clearance_m * 2.0 + 1e-3 * model.contact_h_m if initial_gap_m is None else float(initial_gap_m)
     res = solve_condensed_contact(model.S[np.ix_(keep, keep)], f, B, g0, eps, w, [F / Fmax for F in loads],
                                   initial_closed=g0 <= closure, penetration_tol=penetration_tol, max_iter=max_iter,
                                   point_info=point_info)
@@ -417,12 +445,23 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
             raise ConvergenceError(f"{model.joint} joint: a contact point outside the Hertz-predicted candidate band "
                                    f"penetrates by {pen:.3g} m ({where}); widen CANDIDATE_ANGLE_RAD",
                                    list(res.residual_history), {"penetration_m": pen, "point": where})
-    tangent, stiffness = _tangent(model, closed)
+    # the contact area of the test state: the closed points and the points whose gap is within
+    # ``area_gap_rel`` of the approach increment (GPTS on P2 facets closes only a subset of the Gauss points
+    # of the patch, the others open by round-off-size gaps; the stick state sticks the whole area)
+    g_last = g0 + B @ res.u[-1]
+    gap_tol = area_gap_rel * abs(float(u[-1] - u[0])) if area_gap_rel > 0 else -np.inf
+    area = [c | (g_last[sizes[j]:sizes[j + 1]] <= gap_tol) for j, c in enumerate(closed)]
+    log.info("%s: %d closed points, contact area %d points (gap <= %.3g m)", model.joint,
+             sum(int(c.sum()) for c in closed), sum(int(c.sum()) for c in area), gap_tol)
+    import os
+    if os.environ.get("HA_DUMP"):
+        np.savez(os.environ["HA_DUMP"], g=g_last, pts=np.vstack([p.points for p in model.pairs]), closed=np.concatenate(closed))
+    tangent, stiffness = _tangent(model, area)
     return JointResponse(model.joint, loads, u, sec, tangent, stiffness, int(sum(int(c.sum()) for c in closed)),
                          res.iterations, res.factorizations, res.augmentations,
                          model.dofs, model.free_dofs, model.retained, time.perf_counter() - t0 + model.condense_s,
                          model.condense_s, res.line_search_cuts, res.stabilized_iterations,
-                         res.stabilization_force_share, float(res.residual_history[-1]) / Fmax)
+                         res.stabilization_force_share, float(res.residual_history[-1]) / Fmax, res.low_rank_updates)
 
 
 def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
