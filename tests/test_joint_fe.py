@@ -219,3 +219,61 @@ def test_joint_table_section_for_the_verify_report():
     assert len(sec.rows) == 4 and "conformal" in sec.note
     from femcheck.verify.render import render_markdown
     assert "Joint table" in render_markdown("t", "", [sec])
+
+
+def test_graded_joint_levels_scale_the_contact_patch_on_the_hertz_radius(case):
+    """The spherical levels put a / 3, a / 4.5, a / 6 elements in the Hertz patch (a at the largest joint
+    load) and keep the bulk size; the coarse mesh itself has that edge in the patch and the bulk edge away
+    from it (measured on the mesh: facet edges of the seat top and the ball surface)."""
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
+    from geometry import spherical_joint
+    from geometry.regions import boundary_facets, facet_geometry
+    F20 = max(jc.joint_loads(case, "P0"))
+    a = float(joint_friction(case).contact_radius(F20))
+    levels = {lv: joint_mesh_sizes(case, "spherical", lv, F20) for lv in ("coarse", "default", "fine")}
+    assert [a / levels[lv].contact_m for lv in levels] == pytest.approx([3.0, 4.5, 6.0], rel=1e-12)  # definition
+    assert len({ms.bulk_m for ms in levels.values()}) == 1  # the bulk is the same at every level
+    ms = levels["coarse"]
+    pm = spherical_joint.build(case, ms.bulk_m, contact_size_m=ms.contact_m, contact_zone_radius_m=ms.zone_m,
+                               grading=ms.grading)
+
+    def edges(f):
+        return np.linalg.norm(pm.points[f] - pm.points[np.roll(f, 1, axis=1)], axis=2).mean(axis=1)
+
+    for name in ("sj_seat_contact", "sj_ball_contact"):
+        f = pm.regions[name].facets
+        c, _, _ = facet_geometry(pm.points, f)
+        patch = np.hypot(c[:, 0], c[:, 1]) < a
+        e = edges(f[patch])
+        # longest-edge bisection to a mean tet edge ≤ the target leaves surface edges 0.7–1.2 x the target
+        assert 0.6 * ms.contact_m < e.mean() < 1.25 * ms.contact_m, (name, e.mean() / ms.contact_m)
+        assert patch.sum() >= 40  # the patch is resolved by tens of facets per side
+    # away from the contact the bulk edge is kept: seat top beyond 4 mm > 5 x the patch edge; ball top half
+    # (the cubed sphere's surface edge, 0.35 x the bulk size) > 2.5 x
+    seat = boundary_facets(pm.tets[pm.body_of_tet == [b.name for b in pm.bodies].index("seat")])
+    c, n, _ = facet_geometry(pm.points, seat)
+    far = (np.hypot(c[:, 0], c[:, 1]) > 0.004) & (n[:, 2] > 0.99)
+    assert far.sum() > 0 and edges(seat[far]).mean() > 5 * ms.contact_m
+    ball = boundary_facets(pm.tets[pm.body_of_tet == [b.name for b in pm.bodies].index("ball")])
+    cb, _, _ = facet_geometry(pm.points, ball)
+    assert edges(ball[cb[:, 2] > 0]).mean() > 2.5 * ms.contact_m
+
+
+def test_exact_sphere_gap_removes_the_facet_sagitta(case):
+    """Ball in a flat seat: the initial gap of a seat point at radius r is |x| − R = sqrt(R² + r²) − R
+    exactly (≈ r² / (2 R)), whatever the ball's facets (round-off)."""
+    R = float(case.spherical_joint.ball_radius_m)
+    r = np.linspace(0.0, 5e-4, 11)
+    pts = np.column_stack([r, np.zeros_like(r), np.full_like(r, -R)])
+    pair = SimpleNamespace(points=pts, g0=np.full(r.size, -1.0))
+    import dataclasses as dc
+
+    @dc.dataclass(frozen=True)
+    class P:
+        points: np.ndarray
+        g0: np.ndarray
+    out = jf._exact_sphere_gap(case, P(pair.points, pair.g0))
+    assert out.g0 == pytest.approx(np.sqrt(R**2 + r**2) - R, abs=1e-15)
+    # the Hertz parabola r² / (2 R) up to its next term, −r⁴ / (8 R³): 0.5 % at r = 0.5 mm
+    assert out.g0 == pytest.approx(r**2 / (2 * R), rel=1e-2, abs=1e-15)
