@@ -27,6 +27,16 @@ seated in one step). The initial active set is the one the Hertz patch predicts:
 whose initial gap is within ``closure`` (twice the clearance plus a margin) starts closed; the load is
 stepped (the eq. 1 levels).
 
+Mesh levels (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`). Ball in seat: graded on the
+Hertz radius a at the largest joint load: element edge a / 3, a / 4.5, a / 6 (coarse, default, fine) on
+a contact disc of radius 1.3 a, growing by 0.5 per unit distance from it (bisection of the structured
+ball and seat), the bulk at the case's size at every level. The initial gaps are measured to the exact
+ball surface (:func:`_exact_sphere_gap`: the straight facets' sagitta would open two thirds of the
+patch's Gauss points), the contact iterations start from the Hertz patch of the preload, and the stick
+tangent sticks the contact area (closed points and the points whose final gap is below 1e-3 of the
+approach increment). Changed active sets are solved by Woodbury updates of the last dense Cholesky
+(``low_rank_updates``). Universal joint: the case's size times 2, 1, 0.5 everywhere (not graded).
+
 Compliances (SI: m/N, rad/(N m), m/(N m)):
 * secant along the joint axis for the eq. 1 increment: (u(F_20) − u(F_5)) / (F_20 − F_5);
 * tangent 6 x 6 at the test state: the condensed iteration matrix with the converged contact status
