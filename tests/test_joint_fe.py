@@ -293,3 +293,28 @@ def test_spherical_joint_mesh_convergence_within_3_percent(case):
                       for lv in ("coarse", "default", "fine")], float)
     spread = 100.0 * (comps.max(axis=0) - comps.min(axis=0)) / np.abs(comps[-1])
     assert np.all(spread <= 3.0), dict(zip(jf.COMPONENTS, spread.round(2)))
+
+
+def test_universal_levels_crowd_the_nodes_at_the_loaded_lines(case):
+    """The universal levels warp the angles around pins and bores (φ + (A/2) sin 2φ): measured on the
+    coarse mesh, the bore nodes at the bottom/top lines are 1 − A of the uniform spacing apart and
+    1 + A at the sides (the nodes lie on the exact circle; tolerance: the uniform φ grid is discrete)."""
+    from femcheck.fe_device.mesh_levels import UNIVERSAL_WARP, joint_mesh_sizes
+    from geometry import universal_joint
+    ms = joint_mesh_sizes(case, "universal", "coarse")
+    assert [joint_mesh_sizes(case, "universal", lv).bulk_m for lv in ("default", "fine")] == [ms.bulk_m] * 2
+    pm = universal_joint.build(case, ms.bulk_m, contact_warp=ms.contact_warp, contact_size_m=ms.contact_m)
+    r = float(case.universal_joint.pin_radius_m) + float(case.solid.universal_joint.pin_clearance_m)
+    f = pm.regions["uj_a2_bore_contact"].facets  # link bores: axis y, section (x, z)
+    nodes = pm.points[np.unique(f)]
+    ang = np.unique(np.round(np.arctan2(nodes[:, 2], nodes[:, 0]), 9))
+    assert np.allclose(np.hypot(nodes[:, 0], nodes[:, 2]), r, rtol=1e-9)  # on the bore circle
+    gaps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
+    mid = 0.5 * (ang + np.r_[ang[1:], ang[0] + 2 * np.pi])
+    uniform = 2 * np.pi / ang.size
+    A = UNIVERSAL_WARP["coarse"]
+    at_line = gaps[np.abs(np.abs(np.sin(mid)) - 1) < 0.02]
+    at_side = gaps[np.abs(np.sin(mid)) < 0.2]
+    assert at_line.min() / uniform == pytest.approx(1 - A, rel=0.05)
+    assert at_side.max() / uniform == pytest.approx(1 + A, rel=0.05)
+    assert at_line.max() < uniform < at_side.min()  # finer than uniform at the lines, coarser at the sides

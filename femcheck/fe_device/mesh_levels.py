@@ -42,6 +42,12 @@ JOINT_ZONE_PER_A = 1.3
 JOINT_GRADING = 0.5
 
 
+#: universal joint: graded levels (bulk at 2 x the case size, nodes crowded at the loaded lines by the
+#: angular warp A, spacing 1 − A of the uniform one there, and the same size through the surface)
+UNIVERSAL_GRADED = True
+UNIVERSAL_WARP = {"coarse": 0.5, "default": 0.75, "fine": 0.875}
+
+
 @dataclasses.dataclass(frozen=True)
 class JointMeshSizes:
     """Mesh of one joint's contact FE at one level (m): ``bulk_m`` edge away from the contact,
@@ -55,6 +61,7 @@ class JointMeshSizes:
     zone_m: float | None
     grading: float
     contact_radius_m: float | None
+    contact_warp: float = 0.0
 
 
 def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float | None = None) -> JointMeshSizes:
@@ -77,5 +84,14 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
         a = float(joint_friction(case).contact_radius(float(max_load_N)))
         return JointMeshSizes(level, float(m.spherical_joint_size_m), a / JOINT_CONTACT_FRACTION[level],
                               JOINT_ZONE_PER_A * a, JOINT_GRADING, a)
+    if UNIVERSAL_GRADED:
+        import math
+
+        from geometry.structured import n_around
+        size = _FACTOR["coarse"] * float(m.universal_joint_size_m)
+        n = n_around(float(case.universal_joint.pin_radius_m), size / float(m.contact_refinement))
+        A = UNIVERSAL_WARP[level]
+        arc = 2.0 * math.pi * float(case.universal_joint.pin_radius_m) / n * (1.0 - A)
+        return JointMeshSizes(level, size, arc, None, float(m.grading), None, A)
     size = _FACTOR[level] * float(m.universal_joint_size_m)
     return JointMeshSizes(level, size, size / float(m.contact_refinement), None, float(m.grading), None)
