@@ -318,3 +318,15 @@ def test_universal_levels_crowd_the_nodes_at_the_loaded_lines(case):
     assert at_line.min() / uniform == pytest.approx(1 - A, rel=0.05)
     assert at_side.max() / uniform == pytest.approx(1 + A, rel=0.05)
     assert at_line.max() < uniform < at_side.min()  # finer than uniform at the lines, coarser at the sides
+
+
+@pytest.mark.slow
+def test_universal_joint_mesh_convergence_within_3_percent(case):
+    """Issue 14 target for the pins in their bores: every compliance component within 3 % over the graded
+    coarse, default and fine levels (nodes crowded at the loaded lines, warp 0.5 / 0.75 / 0.875, bulk 2 mm
+    at every level). Measured spread ≤ 1.8 % (docs/joint_fe.md); the bulk is not refined by the levels
+    (≈ 10 min and 6.4 GB at the fine level on the shared machine)."""
+    comps = np.array([jc.check_joint(case, "universal", lv, "P0")["fe_component_compliance"]
+                      for lv in ("coarse", "default", "fine")], float)
+    spread = 100.0 * (comps.max(axis=0) - comps.min(axis=0)) / np.abs(comps[-1])
+    assert np.all(spread <= 3.0), dict(zip(jf.COMPONENTS, spread.round(2)))

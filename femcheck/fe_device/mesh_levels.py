@@ -71,8 +71,11 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
     joint at P0, femcheck.fe_device.joint_check.joint_loads): contact edge a / 3, a / 4.5, a / 6 on a disc
     of radius 1.3 a, growing by 0.5 per unit distance from it; bulk = the case's spherical_joint_size_m at
     every level (so the fine level stays affordable; the level spread measures the contact zone).
-    universal: the case's universal_joint_size_m times 2, 1, 0.5 everywhere (contact = size /
-    contact_refinement), as before."""
+    universal (``UNIVERSAL_GRADED``): bulk = 2 x the case's universal_joint_size_m at every level, the
+    angles around pins and bores warped toward the loaded top/bottom lines (``contact_warp`` A = 0.5,
+    0.75, 0.875: spacing 1 − A of the uniform n_around one there), ``contact_m`` = that arc, also the
+    radial size at the surface; ``UNIVERSAL_GRADED = False``: the case's size times 2, 1, 0.5 everywhere
+    (the levels before the graded ones)."""
     if level not in _FACTOR or level == "finer":
         raise ValueError(f"mesh level = {level!r}; expected one of {', '.join(MESH_LEVELS)}")
     m = case.solid.mesh
