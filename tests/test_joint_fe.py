@@ -271,14 +271,13 @@ def test_exact_sphere_gap_removes_the_facet_sagitta(case):
     R = float(case.spherical_joint.ball_radius_m)
     r = np.linspace(0.0, 5e-4, 11)
     pts = np.column_stack([r, np.zeros_like(r), np.full_like(r, -R)])
-    pair = SimpleNamespace(points=pts, g0=np.full(r.size, -1.0))
     import dataclasses as dc
 
     @dc.dataclass(frozen=True)
-    class P:
+    class Pair:  # the two fields of a contact pair that the function reads and replaces
         points: np.ndarray
         g0: np.ndarray
-    out = jf._exact_sphere_gap(case, P(pair.points, pair.g0))
+    out = jf._exact_sphere_gap(case, Pair(pts, np.full(r.size, -1.0)))  # facet gaps: anything
     assert out.g0 == pytest.approx(np.sqrt(R**2 + r**2) - R, abs=1e-15)
     # the Hertz parabola r² / (2 R) up to its next term, −r⁴ / (8 R³): 0.5 % at r = 0.5 mm
     assert out.g0 == pytest.approx(r**2 / (2 * R), rel=1e-2, abs=1e-15)
