@@ -55,7 +55,12 @@ from geometry.subdivision import refine_near
 PART = "spherical_joint"
 
 
-def parameters(case, size: float | None = None, *, link_direction=(0.0, 0.0, 1.0), seat: str | None = None) -> dict:
+def parameters(case, size: float | None = None, *, link_direction=(0.0, 0.0, 1.0), seat: str | None = None,
+               contact_size_m: float | None = None, contact_zone_radius_m: float | None = None,
+               grading: float | None = None) -> dict:
+    """Mesh parameters (the cache key). ``contact_size_m`` / ``contact_zone_radius_m`` override the case's
+    contact edge (size / contact_refinement) and fine-zone radius: the graded joint-FE levels
+    (:mod:`femcheck.fe_device.mesh_levels`, element size in the Hertz patch a fixed fraction of a)."""
     sj, so, me = case.spherical_joint, case.solid.spherical_joint, case.solid.mesh
     d = np.asarray(link_direction, float)
     d = d / np.linalg.norm(d)
@@ -63,17 +68,21 @@ def parameters(case, size: float | None = None, *, link_direction=(0.0, 0.0, 1.0
             "analytic_seat_curvature_1_per_m": sj.seat_curvature_1_per_m,
             "seat": seat or so.seat, "seat_radius_m": so.seat_radius_m, "seat_thickness_m": so.seat_thickness_m,
             "socket_clearance_m": so.socket_clearance_m, "socket_wall_m": so.socket_wall_m, "socket_depth_m": so.socket_depth_m,
-            "contact_zone_radius_m": so.contact_zone_radius_m, "link_cap_half_angle_deg": so.link_cap_half_angle_deg,
+            "contact_zone_radius_m": float(contact_zone_radius_m or so.contact_zone_radius_m), "link_cap_half_angle_deg": so.link_cap_half_angle_deg,
             "link_direction": [round(float(v), 12) for v in d],
             "size_m": float(size or me.spherical_joint_size_m), "contact_refinement": me.contact_refinement,
-            "grading": me.grading, "refinement": me.refinement, "tetwild_epsilon_rel": me.tetwild_epsilon_rel}
+            "grading": float(grading or me.grading), "refinement": me.refinement, "tetwild_epsilon_rel": me.tetwild_epsilon_rel,
+            **({} if contact_size_m is None else {"contact_size_m": float(contact_size_m)})}
 
 
 def build(case, size: float | None = None, *, link_direction=(0.0, 0.0, 1.0), seat: str | None = None,
-          use_cache: bool = True) -> PartMesh:
+          use_cache: bool = True, contact_size_m: float | None = None, contact_zone_radius_m: float | None = None,
+          grading: float | None = None) -> PartMesh:
     """Mesh of ball + seat (see module doc). size: edge length away from the contact, m; link_direction:
-    unit vector (local frame) of the link leaving the ball (sets the coupling cap); seat overrides the case."""
-    p = parameters(case, size, link_direction=link_direction, seat=seat)
+    unit vector (local frame) of the link leaving the ball (sets the coupling cap); seat overrides the case;
+    contact_size_m / contact_zone_radius_m override the contact edge and fine-zone radius (:func:`parameters`)."""
+    p = parameters(case, size, link_direction=link_direction, seat=seat, contact_size_m=contact_size_m,
+                   contact_zone_radius_m=contact_zone_radius_m, grading=grading)
     return cached_build(PART, p, lambda: mesh(p), use_cache)
 
 
@@ -109,6 +118,8 @@ def _ball_structured(p, h, h_c, g, graded: bool = True):
 
         def size(x):
             return h_c + g * np.maximum(np.linalg.norm(x - q, axis=1) - zone, 0.0)
+        if "contact_size_m" in p:  # graded joint-FE levels: fine on the contact disc only, graded in depth
+            size = _disc_size(p, h_c, g)
 
         def snap(x, nodes):
             return snap_to_sphere(x, nodes, [0, 0, 0], R)
@@ -134,6 +145,40 @@ def _ball_tetwild(p, h, h_c, g, subdivide: bool = False):
             return snap_to_sphere(x, nodes, [0, 0, 0], R)
         pts, tets = refine_near(pts, tets, q, h_c, p["contact_zone_radius_m"], part=PART, parameters=p, snap=snap)
     return pts, tets
+
+
+def _disc_size(p, h_c, g):
+    """Target size (m) of the graded joint-FE levels: h_c on the contact disc (radius contact_zone_radius_m
+    about Q in the tangent plane z = -R) and h_c + g d at a distance d from it, so that the elements are
+    fine where the Hertz patch and its edge are and grow at once with the depth below it (the bulk keeps
+    the structured size)."""
+    R, zone = p["ball_radius_m"], p["contact_zone_radius_m"]
+
+    def size(x):
+        rho = np.hypot(x[:, 0], x[:, 1])
+        return h_c + g * np.hypot(np.maximum(rho - zone, 0.0), x[:, 2] + R)
+    return size
+
+
+def _seat_refined(p, h, h_c, g):
+    """Graded joint-FE levels: the uniform structured seat (size h) bisected toward the contact disc
+    (:func:`_disc_size`, geometry.subdivision.refine_to_size); a socket's refined cup nodes are snapped
+    back onto the cup sphere."""
+    from geometry.solid_mesh import compact
+    from geometry.subdivision import refine_to_size
+    pts, tets, volume = _seat_structured(p, h, h, 0.0)
+    snap = None
+    if p["seat"] == "socket":
+        R, c = p["ball_radius_m"], p["socket_clearance_m"]
+        rs, centre = R + c, np.array([0.0, 0.0, c])
+
+        def snap(x, nodes):
+            d = np.linalg.norm(x[nodes] - centre, axis=1)
+            on_cup = nodes[np.abs(d - rs) < 1e-3 * rs]
+            return snap_to_sphere(x, on_cup, centre, rs)
+    pts, tets = refine_to_size(pts, tets, _disc_size(p, h_c, g), part=PART, parameters=p, snap=snap)
+    pts, tets = compact(pts, tets)
+    return pts, tets, volume
 
 
 def _ring_levels(radii_breaks, r_zone, h, h_c, g):
@@ -223,13 +268,15 @@ def mesh(p: dict) -> PartMesh:
     if p["seat"] not in ("flat", "socket"):
         raise MeshingError(PART, p, f"seat = {p['seat']!r}; expected 'flat' or 'socket'")
     uniform = p["refinement"] == "uniform"
-    h_c = h if uniform else h / p["contact_refinement"]
+    h_c = h if uniform else p.get("contact_size_m", h / p["contact_refinement"])
     g = p["grading"]
     _seat_structured(p, h, h, 0.0)  # validates the seat dimensions in milliseconds, before any pytetwild run
     if p["refinement"] == "sizing_field":
         seat_pts, seat_tets, seat_vol = _seat_tetwild(p, h, h_c, g, uniform=False)
     elif uniform:
         seat_pts, seat_tets, seat_vol = _seat_structured(p, h, h, 0.0)
+    elif "contact_size_m" in p:
+        seat_pts, seat_tets, seat_vol = _seat_refined(p, h, h_c, g)
     else:
         seat_pts, seat_tets, seat_vol = _seat_structured(p, h, h_c, g)
     ball_pts, ball_tets = _ball(p, h, h_c, g)

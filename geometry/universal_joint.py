@@ -39,46 +39,67 @@ from geometry.structured import (circle, extrude, graded_levels, levels_with_zon
 PART = "universal_joint"
 
 
-def parameters(case, size: float | None = None) -> dict:
+def parameters(case, size: float | None = None, *, contact_warp: float = 0.0, contact_size_m: float | None = None) -> dict:
+    """Mesh parameters (the cache key). ``contact_warp`` A in [0, 1): the angles around pins and bores are
+    φ + (A/2) sin 2φ of a uniform φ (0 = uniform), so the spacing is 1 − A times the uniform one at the
+    top and bottom lines (where a pin bears) and 1 + A at the sides; ``contact_size_m`` overrides the
+    radial (through the surface) contact edge size / contact_refinement. The joint-FE levels
+    (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`) use both; the defaults keep the mesh."""
     uj, so, me = case.universal_joint, case.solid.universal_joint, case.solid.mesh
     return {"pin_radius_m": uj.pin_radius_m, "contact_length_m": uj.contact_length_m, "pin_span_m": uj.pin_span_m,
             "pin_material": uj.pin_material.name, "bore_material": uj.bore_material.name,
             "pin_clearance_m": so.pin_clearance_m, "pin_position": so.pin_position, "yoke_wall_m": so.yoke_wall_m,
             "yoke_arm_length_m": so.yoke_arm_length_m, "hub_half_length_m": so.hub_half_length_m,
             "size_m": float(size or me.universal_joint_size_m), "contact_refinement": me.contact_refinement,
-            "grading": me.grading, "refinement": me.refinement}
+            "grading": me.grading, "refinement": me.refinement,
+            **({} if not contact_warp else {"contact_warp": float(contact_warp)}),
+            **({} if contact_size_m is None else {"contact_size_m": float(contact_size_m)})}
 
 
-def build(case, size: float | None = None, *, use_cache: bool = True) -> PartMesh:
-    """Mesh of cross pins and yoke arms (see module doc). size: edge length away from the contacts, m."""
-    p = parameters(case, size)
+def build(case, size: float | None = None, *, use_cache: bool = True, contact_warp: float = 0.0,
+          contact_size_m: float | None = None) -> PartMesh:
+    """Mesh of cross pins and yoke arms (see module doc). size: edge length away from the contacts, m;
+    contact_warp, contact_size_m: :func:`parameters`."""
+    p = parameters(case, size, contact_warp=contact_warp, contact_size_m=contact_size_m)
     return cached_build(PART, p, lambda: mesh(p), use_cache)
 
 
-def _pin(r, length, h, h_c, g, zones):
-    """Pin along the local extrusion axis t in [-length/2, length/2]: points in (section x, section y, t)."""
+def warped_circle(r: float, A: float):
+    """Circle of radius r parametrised by φ -> angle φ + (A/2) sin 2φ: nodes at uniform φ crowd at the
+    top and bottom (spacing 1 − A) and spread at the sides (1 + A); A = 0: the plain circle."""
+    if not A:
+        return circle(r)
+    return lambda ph: circle(r)(ph + 0.5 * A * np.sin(2.0 * ph))
+
+
+def _pin(r, length, h, h_c, g, zones, A=0.0, h_r=None):
+    """Pin along the local extrusion axis t in [-length/2, length/2]: points in (section x, section y, t).
+    h_r: the radial size at the surface (default h_c); A: angular warp (:func:`warped_circle`)."""
     n = n_around(r, h_c)
-    depth = graded_levels(0.0, r, h_c, min(h, h_c + g * r), h)  # from the surface inward
+    h_r = h_c if h_r is None else h_r
+    depth = graded_levels(0.0, r, h_r, min(h, h_r + g * r), h)  # from the surface inward
     radii = r - depth[::-1]
     counts = [1] + [max(6, math.ceil(n * rj / r)) for rj in radii[1:]]
     counts[-1] = n
-    pts2, tris, _ = ring_section(None, circle(r), radii / r, counts)
+    pts2, tris, _ = ring_section(None, warped_circle(r, A), radii / r, counts)
     lv = levels_with_zones(-length / 2, length / 2, zones, h, h, g)
     return extrude(pts2, tris, (lv - lv[0]) / (lv[-1] - lv[0]), -length / 2, length / 2)
 
 
-def _arm(rb, y0, y1, z0, z1, x0, x1, h, h_c, g):
+def _arm(rb, y0, y1, z0, z1, x0, x1, h, h_c, g, A=0.0, h_r=None):
     """Arm with a bore (radius rb, centred at the section origin) through the thickness x0..x1; the section
-    outline is the rectangle [y0, y1] x [z0, z1] (section coordinates)."""
+    outline is the rectangle [y0, y1] x [z0, z1] (section coordinates). h_r: radial size at the bore
+    (default h_c); A: angular warp of the bore nodes (:func:`warped_circle`), blended out to the outline."""
     outline, corners = rectangle(y0, y1, z0, z1)
     n = n_around(rb, h_c)
+    h_r = h_c if h_r is None else h_r
     far = max(abs(v) for v in (y0, y1, z0, z1))
     near = min(abs(v) for v in (y0, y1, z0, z1))
-    # ring blend levels: graded from the bore (h_c) outward, resolving the far side too
-    dist = graded_levels(0.0, near - rb, h_c, min(h, h_c + g * (near - rb)), h)
+    # ring blend levels: graded from the bore (h_r) outward, resolving the far side too
+    dist = graded_levels(0.0, near - rb, h_r, min(h, h_r + g * (near - rb)), h)
     k_far = max(len(dist) - 1, math.ceil((far - rb) / h))
     t = np.interp(np.linspace(0, len(dist) - 1, k_far + 1), np.arange(len(dist)), dist / (near - rb))
-    pts2, tris, _ = ring_section(circle(rb), outline, t, [n] * len(t), extra_angles=corners)
+    pts2, tris, _ = ring_section(warped_circle(rb, A), outline, t, [n] * len(t), extra_angles=corners)
     nx = max(3, math.ceil((x1 - x0) / h))
     return extrude(pts2, tris, np.linspace(0, 1, nx + 1), x0, x1)
 
@@ -100,7 +121,8 @@ def mesh(p: dict) -> PartMesh:
     delta = c if p["pin_position"] == "bottom" else 0.0
     Lp = Lu + l
     zones = [(-Lu / 2 - l / 2, -Lu / 2 + l / 2), (Lu / 2 - l / 2, Lu / 2 + l / 2)]
-    sp, st = _pin(r, Lp, h, h_c, g, zones)
+    A, h_r = p.get("contact_warp", 0.0), p.get("contact_size_m", h_c)
+    sp, st = _pin(r, Lp, h, h_c, g, zones, A, h_r)
     pin_vol = math.pi * r**2 * Lp
     bodies = []
 
@@ -114,9 +136,9 @@ def mesh(p: dict) -> PartMesh:
     arm_vol = l * (w * (w + H) - math.pi * rb**2)
     for sign, tag in ((-1, "m"), (1, "p")):
         xc = sign * Lu / 2
-        ap, at = _arm(rb, -w / 2, w / 2, -w / 2, w / 2 + H, xc - l / 2, xc + l / 2, h, h_c, g)
+        ap, at = _arm(rb, -w / 2, w / 2, -w / 2, w / 2 + H, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r)
         place(f"yoke_platform_{tag}", p["bore_material"], arm_vol, ap, at, [2, 0, 1], [0, 0, 0])
-        ap, at = _arm(rb, -w / 2, w / 2, -w / 2 - H, w / 2, xc - l / 2, xc + l / 2, h, h_c, g)
+        ap, at = _arm(rb, -w / 2, w / 2, -w / 2 - H, w / 2, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r)
         place(f"yoke_link_{tag}", p["bore_material"], arm_vol, ap, at, [0, 2, 1], [0, 0, 0])
     z_top, z_bot = w / 2 + H, -w / 2 - H
 

@@ -151,9 +151,13 @@ def test_joint_table_html_names_flagged_laws():
 
 @pytest.fixture(scope="module")
 def spherical_coarse(case):
-    """The ball-in-seat contact FE at the coarse mesh, built once (≈ 12 s: mesh, assembly, condensation)."""
-    model = jf.build_joint(case, "spherical", "coarse")
+    """The ball-in-seat contact FE on a cheap graded mesh (patch edge a / 2, bulk 2 mm; the coarse level
+    is a / 3 at 1 mm, ≈ 95 k DOFs, for the slow tests), built once (mesh, assembly, condensation)."""
+    from femcheck.fe_device.joint_friction import joint_friction
     loads = jc.joint_loads(case, "P0")
+    a = float(joint_friction(case).contact_radius(max(loads)))
+    model = jf.build_joint(case, "spherical", "coarse", max_load_N=max(loads),
+                           mesh_options={"contact_size_m": a / 2, "contact_zone_radius_m": 1.3 * a, "grading": 0.5})
     an = jf.analytical_compliance(case, "spherical", loads)
     # penetration accepted: 1e-3 of the analytical approach at the preload (as check_joint)
     tol = 1e-3 * float(an[2, 2]) * min(loads)
@@ -187,10 +191,11 @@ def test_spherical_joint_pulled_out_is_a_convergence_error(spherical_coarse):
     assert exc.value.residual_history
 
 
+@pytest.mark.slow
 def test_universal_joint_contact_fe_converges_coarse(case, tmp_path):
     """The cross floating in its 2c clearance seats and converges (it chattered before, issue 14); the
-    6 x 6 tangent is symmetric and positive definite; the JSON carries the contract keys (≈ 17 s with
-    PARDISO's Schur complement; ≈ 60 s with the blockwise fallback)."""
+    6 x 6 tangent is symmetric and positive definite; the JSON carries the contract keys. Slow since the
+    graded coarse level (238 k DOFs: about 40 s of CPU, 2–3 min wall on the loaded machine)."""
     from femcheck.cli import main
     out = tmp_path / "u.json"
     assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", "universal", "--mesh", "coarse",
@@ -219,3 +224,109 @@ def test_joint_table_section_for_the_verify_report():
     assert len(sec.rows) == 4 and "conformal" in sec.note
     from femcheck.verify.render import render_markdown
     assert "Joint table" in render_markdown("t", "", [sec])
+
+
+def test_graded_joint_levels_scale_the_contact_patch_on_the_hertz_radius(case):
+    """The spherical levels put a / 3, a / 4.5, a / 6 elements in the Hertz patch (a at the largest joint
+    load) and keep the bulk size; the coarse mesh itself has that edge in the patch and the bulk edge away
+    from it (measured on the mesh: facet edges of the seat top and the ball surface)."""
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
+    from geometry import spherical_joint
+    from geometry.regions import boundary_facets, facet_geometry
+    F20 = max(jc.joint_loads(case, "P0"))
+    a = float(joint_friction(case).contact_radius(F20))
+    levels = {lv: joint_mesh_sizes(case, "spherical", lv, F20) for lv in ("coarse", "default", "fine")}
+    assert [a / levels[lv].contact_m for lv in levels] == pytest.approx([3.0, 4.5, 6.0], rel=1e-12)  # definition
+    assert len({ms.bulk_m for ms in levels.values()}) == 1  # the bulk is the same at every level
+    ms = levels["coarse"]
+    pm = spherical_joint.build(case, ms.bulk_m, contact_size_m=ms.contact_m, contact_zone_radius_m=ms.zone_m,
+                               grading=ms.grading)
+
+    def edges(f):
+        return np.linalg.norm(pm.points[f] - pm.points[np.roll(f, 1, axis=1)], axis=2).mean(axis=1)
+
+    for name in ("sj_seat_contact", "sj_ball_contact"):
+        f = pm.regions[name].facets
+        c, _, _ = facet_geometry(pm.points, f)
+        patch = np.hypot(c[:, 0], c[:, 1]) < a
+        e = edges(f[patch])
+        # longest-edge bisection to a mean tet edge ≤ the target leaves surface edges 0.7–1.2 x the target
+        assert 0.6 * ms.contact_m < e.mean() < 1.25 * ms.contact_m, (name, e.mean() / ms.contact_m)
+        assert patch.sum() >= 40  # the patch is resolved by tens of facets per side
+    # away from the contact the bulk edge is kept: seat top beyond 4 mm > 5 x the patch edge; ball top half
+    # (the cubed sphere's surface edge, 0.35 x the bulk size) > 2.5 x
+    seat = boundary_facets(pm.tets[pm.body_of_tet == [b.name for b in pm.bodies].index("seat")])
+    c, n, _ = facet_geometry(pm.points, seat)
+    far = (np.hypot(c[:, 0], c[:, 1]) > 0.004) & (n[:, 2] > 0.99)
+    assert far.sum() > 0 and edges(seat[far]).mean() > 5 * ms.contact_m
+    ball = boundary_facets(pm.tets[pm.body_of_tet == [b.name for b in pm.bodies].index("ball")])
+    cb, _, _ = facet_geometry(pm.points, ball)
+    assert edges(ball[cb[:, 2] > 0]).mean() > 2.5 * ms.contact_m
+
+
+def test_exact_sphere_gap_removes_the_facet_sagitta(case):
+    """Ball in a flat seat: the initial gap of a seat point at radius r is |x| − R = sqrt(R² + r²) − R
+    exactly (≈ r² / (2 R)), whatever the ball's facets (round-off)."""
+    R = float(case.spherical_joint.ball_radius_m)
+    r = np.linspace(0.0, 5e-4, 11)
+    pts = np.column_stack([r, np.zeros_like(r), np.full_like(r, -R)])
+    import dataclasses as dc
+
+    @dc.dataclass(frozen=True)
+    class Pair:  # the two fields of a contact pair that the function reads and replaces
+        points: np.ndarray
+        g0: np.ndarray
+    out = jf._exact_sphere_gap(case, Pair(pts, np.full(r.size, -1.0)))  # facet gaps: anything
+    assert out.g0 == pytest.approx(np.sqrt(R**2 + r**2) - R, abs=1e-15)
+    # the Hertz parabola r² / (2 R) up to its next term, −r⁴ / (8 R³): 0.5 % at r = 0.5 mm
+    assert out.g0 == pytest.approx(r**2 / (2 * R), rel=1e-2, abs=1e-15)
+
+
+@pytest.mark.slow
+def test_spherical_joint_mesh_convergence_within_3_percent(case):
+    """Issue 14 target: every compliance component of the ball-in-seat contact FE within 3 % over the
+    coarse, default and fine levels (patch edge a / 3, a / 4.5, a / 6; max − min over the fine value).
+    Measured spread ≤ 1.5 % (docs/joint_fe.md); the bulk is the same at every level, so this is the
+    convergence of the contact zone (≈ 6 min on the shared 2-core machine)."""
+    comps = np.array([jc.check_joint(case, "spherical", lv, "P0")["fe_component_compliance"]
+                      for lv in ("coarse", "default", "fine")], float)
+    spread = 100.0 * (comps.max(axis=0) - comps.min(axis=0)) / np.abs(comps[-1])
+    assert np.all(spread <= 3.0), dict(zip(jf.COMPONENTS, spread.round(2)))
+
+
+def test_universal_levels_crowd_the_nodes_at_the_loaded_lines(case):
+    """The universal levels warp the angles around pins and bores (φ + (A/2) sin 2φ): measured on the
+    coarse mesh, the bore nodes at the bottom/top lines are 1 − A of the uniform spacing apart and
+    1 + A at the sides (the nodes lie on the exact circle; tolerance: the uniform φ grid is discrete)."""
+    from femcheck.fe_device.mesh_levels import UNIVERSAL_WARP, joint_mesh_sizes
+    from geometry import universal_joint
+    ms = joint_mesh_sizes(case, "universal", "coarse")
+    assert [joint_mesh_sizes(case, "universal", lv).bulk_m for lv in ("default", "fine")] == [ms.bulk_m] * 2
+    pm = universal_joint.build(case, ms.bulk_m, contact_warp=ms.contact_warp, contact_size_m=ms.contact_m)
+    r = float(case.universal_joint.pin_radius_m) + float(case.solid.universal_joint.pin_clearance_m)
+    f = pm.regions["uj_a2_bore_contact"].facets  # link bores: axis y, section (x, z)
+    nodes = pm.points[np.unique(f)]
+    ang = np.unique(np.round(np.arctan2(nodes[:, 2], nodes[:, 0]), 9))
+    assert np.allclose(np.hypot(nodes[:, 0], nodes[:, 2]), r, rtol=1e-9)  # on the bore circle
+    gaps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
+    mid = 0.5 * (ang + np.r_[ang[1:], ang[0] + 2 * np.pi])
+    uniform = 2 * np.pi / ang.size
+    A = UNIVERSAL_WARP["coarse"]
+    at_line = gaps[np.abs(np.abs(np.sin(mid)) - 1) < 0.02]
+    at_side = gaps[np.abs(np.sin(mid)) < 0.2]
+    assert at_line.min() / uniform == pytest.approx(1 - A, rel=0.05)
+    assert at_side.max() / uniform == pytest.approx(1 + A, rel=0.05)
+    assert at_line.max() < uniform < at_side.min()  # finer than uniform at the lines, coarser at the sides
+
+
+@pytest.mark.slow
+def test_universal_joint_mesh_convergence_within_3_percent(case):
+    """Issue 14 target for the pins in their bores: every compliance component within 3 % over the graded
+    coarse, default and fine levels (nodes crowded at the loaded lines, warp 0.5 / 0.75 / 0.875, bulk 2 mm
+    at every level). Measured spread ≤ 1.8 % (docs/joint_fe.md); the bulk is not refined by the levels
+    (≈ 10 min and 6.4 GB at the fine level on the shared machine)."""
+    comps = np.array([jc.check_joint(case, "universal", lv, "P0")["fe_component_compliance"]
+                      for lv in ("coarse", "default", "fine")], float)
+    spread = 100.0 * (comps.max(axis=0) - comps.min(axis=0)) / np.abs(comps[-1])
+    assert np.all(spread <= 3.0), dict(zip(jf.COMPONENTS, spread.round(2)))

@@ -78,11 +78,24 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0") -> d
     tol = 1e-3 * float(an[2, 2]) * min(loads)
     # spherical: the ball is pressed into the seat (−z); universal: the link pushes its yoke along +z
     sign = -1.0 if joint == "spherical" else 1.0
-    r = jf.solve_joint(model, loads, sign, penetration_tol=tol)
+    start = None
+    if joint == "spherical":  # start from the Hertz patch of the preload: g0 ≤ δ_H(F_5) / 2 ⇔ r ≤ a(F_5)
+        from femcheck.fe_device.joint_friction import joint_friction
+        from femcheck.fe_device.loads import hertz_approach
+        fr = joint_friction(case)
+        start = 0.5 * float(hertz_approach(min(loads), fr.E_star_Pa, fr.R_star_m))
+    # spherical: the stick state sticks the contact area (closed points and points within 1e-3 of the
+    # approach increment); universal: the closed points (as measured before)
+    r = jf.solve_joint(model, loads, sign, penetration_tol=tol, initial_gap_m=start,
+                       area_gap_rel=1e-3 if joint == "spherical" else 0.0)
+    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
+    ms = joint_mesh_sizes(case, joint, mesh, max(loads))
     fe = r.fe_compliance
     return {"joint": joint, "mesh": mesh, "point": point.upper(), "converged": True, "dofs": r.dofs,
             "free_dofs": r.free_dofs, "retained_dofs": r.retained, "iterations": r.iterations,
             "factorizations": r.factorizations + model.factorizations, "augmentations": r.augmentations,
+            "low_rank_updates": r.low_rank_updates, "contact_size_m": ms.contact_m, "bulk_size_m": ms.bulk_m,
+            "hertz_contact_radius_m": ms.contact_radius_m,
             "seconds": r.seconds, "condense_s": r.condense_s, "loads_N": list(loads),
             "line_search_cuts": r.line_search_cuts, "stabilized_iterations": r.stabilized_iterations,
             "stabilization_force_share": r.stabilization_force_share, "residual_rel": r.residual_rel,

@@ -159,7 +159,8 @@ def _code_version() -> str:
     from geometry.cache import code_version as geometry_version
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256(geometry_version().encode())
-    files = [Path(__file__), root / "fe_device" / "joint_fe.py", root / "fe" / "elasticity.py",
+    files = [Path(__file__), root / "fe_device" / "joint_fe.py", root / "fe_device" / "mesh_levels.py",
+             root / "fe" / "elasticity.py",
              root / "fe" / "constraints.py", *sorted((root / "fe" / "contact").glob("*.py"))]
     for f in files:
         h.update(f.read_bytes())
@@ -220,7 +221,14 @@ def measure_joint_law(case, joint: str, mesh: str = "coarse", ladder=None, use_c
     # penetration accepted: 1e-3 of the analytical approach increment at the first level (as check-joints)
     tol = 1e-3 * float(an[2, 2]) * float(ladder[0])
     sign = -1.0 if joint == "spherical" else 1.0
-    r = jf.solve_joint(model, tuple(ladder), sign, penetration_tol=tol, level_tangents=True)
+    start = None
+    if joint == "spherical":  # as check-joints: start from the Hertz patch of the first level, stick the contact area
+        from femcheck.fe_device.joint_friction import joint_friction
+        from femcheck.fe_device.loads import hertz_approach
+        fr = joint_friction(case)
+        start = 0.5 * float(hertz_approach(float(ladder[0]), fr.E_star_Pa, fr.R_star_m))
+    r = jf.solve_joint(model, tuple(ladder), sign, penetration_tol=tol, initial_gap_m=start,
+                       area_gap_rel=1e-3 if joint == "spherical" else 0.0, level_tangents=True)
     law = MeasuredJointLaw(joint, mesh, ladder, np.asarray(r.axial_m, float), np.asarray(r.level_tangent_stiffness),
                            r.dofs, r.iterations, time.perf_counter() - t0)
     log.info("%s joint law measured (%s mesh, %d DOFs, %d contact iterations, %.1f s)", joint, mesh, r.dofs,

@@ -49,7 +49,8 @@ class CondensedContactResult:
     ``factorizations``, ``augmentations``, ``line_search_cuts`` (steps with α < 1) totals;
     ``residual_history`` ‖r‖ (N) per iteration; ``stabilized_iterations`` iterations whose matrix needed
     the spring; ``stabilization_force_share`` largest δ‖d‖/‖f‖ of the last step of a converged solve (module
-    doc; 0 when its matrix had no spring); ``seconds``.
+    doc; 0 when its matrix had no spring); ``seconds``; ``low_rank_updates`` active-set changes solved by a
+    Woodbury update of the last factorization instead of a new one.
     """
 
     u: np.ndarray
@@ -63,6 +64,7 @@ class CondensedContactResult:
     stabilized_iterations: int
     stabilization_force_share: float
     seconds: float
+    low_rank_updates: int = 0
 
 
 def _line_search(S_d_d: float, r_d: float, g, b, lam, eps, w) -> float:
@@ -98,13 +100,17 @@ def _line_search(S_d_d: float, r_d: float, g, b, lam, eps, w) -> float:
 
 def solve_condensed_contact(S: np.ndarray, f: np.ndarray, B, g0, eps, w, load_factors=(1.0,), *,
                             initial_closed=None, penetration_tol: float, rtol: float = 1e-9,
-                            max_iter: int = 100, max_augment: int = 40, point_info=None) -> CondensedContactResult:
+                            max_iter: int = 100, max_augment: int = 40, point_info=None,
+                            low_rank_fraction: float = 0.08) -> CondensedContactResult:
     """Solve the frictionless contact problem on a dense stiffness (module doc).
 
     S (n, n) N/m symmetric positive semidefinite; f (n,) N at load factor 1; B (m, n) gap operator
     (g = g0 + B u, m); g0, eps (N/m³), w (m²) (m,); load_factors increasing, each a converged state;
     initial_closed (m,) bool, the predicted active set of the first iteration; penetration_tol (m);
-    point_info callable(indices) -> list of dicts naming chattering points (for the error detail).
+    point_info callable(indices) -> list of dicts naming chattering points (for the error detail);
+    low_rank_fraction: an active set that differs from the factorized one by at most this fraction of n
+    points is solved by a Woodbury update of that factorization (``low_rank_updates``) instead of a new
+    Cholesky (0 = always refactorize).
     """
     t0 = time.perf_counter()
     S = np.asarray(S, float)
@@ -121,7 +127,9 @@ def solve_condensed_contact(S: np.ndarray, f: np.ndarray, B, g0, eps, w, load_fa
     status_hist: list[np.ndarray] = []
     nit = nfac = naug = ncut = nstab = 0
     stab_share = last_share = 0.0
-    fac = fac_status = None
+    fac = fac_status = upd = None
+    nupd = 0
+    low_rank_max = int(low_rank_fraction * n)
     delta = 0.0
     out_u, out_p, out_c = [], [], []
     first = True
@@ -147,7 +155,15 @@ def solve_condensed_contact(S: np.ndarray, f: np.ndarray, B, g0, eps, w, load_fa
                     break
                 if it == max_iter:
                     break
-                if fac is None or not np.array_equal(closed, fac_status):
+                if fac is not None and not np.array_equal(closed, fac_status) and low_rank_max > 0:
+                    # the active set changed by k points: H = H_fac ± Σ b bᵀ w ε, solved by Woodbury on the
+                    # factorization of H_fac while k ≤ low_rank_max (O(n² k) instead of O(n³) per change)
+                    if upd is None or not np.array_equal(closed, upd[0]):
+                        upd = _low_rank_update(fac, B, closed, fac_status, w, eps, low_rank_max)
+                        nupd += upd is not None
+                else:
+                    upd = None
+                if (fac is None or not np.array_equal(closed, fac_status)) and upd is None:
                     Bc = B[np.flatnonzero(closed)]
                     H = S + (Bc.T @ sp.diags(w[closed] * eps[closed]) @ Bc).toarray()
                     delta = 0.0
@@ -166,9 +182,9 @@ def solve_condensed_contact(S: np.ndarray, f: np.ndarray, B, g0, eps, w, load_fa
                 # still open contributes its linearised pressure λ − ε g (how a 2c clearance is crossed
                 # in one step); kept only if it is a descent direction of Π, else the plain step
                 pn = np.where(closed, lam - eps * g, p)
-                d = sla.cho_solve(fac, fl + BT @ (w * pn) - S @ u, check_finite=False)
+                d = _solve(fac, upd, fl + BT @ (w * pn) - S @ u)
                 if float(r @ d) <= 0.0:
-                    d = sla.cho_solve(fac, r, check_finite=False)
+                    d = _solve(fac, upd, r)
                 # the spring's force in this step; the one of the last step before convergence is what
                 # it would carry in the converged state (reported; the residual r never contains it)
                 last_share = delta * float(np.linalg.norm(d)) / fnorm
@@ -207,4 +223,33 @@ def solve_condensed_contact(S: np.ndarray, f: np.ndarray, B, g0, eps, w, load_fa
         out_p.append(p.copy())
         out_c.append(p > 0)
     return CondensedContactResult(np.array(out_u), np.array(out_p), np.array(out_c), nit, nfac, naug, ncut,
-                                  tuple(hist), nstab, stab_share, time.perf_counter() - t0)
+                                  tuple(hist), nstab, stab_share, time.perf_counter() - t0, nupd)
+
+
+def _low_rank_update(fac, B, closed, fac_status, w, eps, k_max):
+    """Woodbury data for H = H_fac + Uᵀ C U, U = B[changed] (k, n), C = ±diag(w ε) (+ closed since the
+    factorization, − opened): (closed, Z = H_fac⁻¹ Uᵀ, U, M⁻¹-factor) or None when k > k_max or M is
+    singular (then the caller refactorizes)."""
+    changed = np.flatnonzero(closed != fac_status)
+    if changed.size == 0 or changed.size > k_max:
+        return None
+    U = B[changed].toarray()
+    c = np.where(closed[changed], 1.0, -1.0) * w[changed] * eps[changed]
+    Z = sla.cho_solve(fac, U.T, check_finite=False)
+    M = np.diag(1.0 / c) + U @ Z
+    try:
+        lu = sla.lu_factor(M, check_finite=False)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    if not np.all(np.isfinite(lu[0])) or np.min(np.abs(np.diag(lu[0]))) <= 1e-13 * np.max(np.abs(np.diag(lu[0]))):
+        return None
+    return closed.copy(), Z, U, lu
+
+
+def _solve(fac, upd, y):
+    """H⁻¹ y with the Cholesky factor of H_fac and, when given, its Woodbury update (:func:`_low_rank_update`)."""
+    z = sla.cho_solve(fac, y, check_finite=False)
+    if upd is None:
+        return z
+    _, Z, U, lu = upd
+    return z - Z @ sla.lu_solve(lu, U @ z, check_finite=False)
