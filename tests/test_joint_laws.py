@@ -177,3 +177,17 @@ def test_extended_case_puts_the_measured_ratio_into_the_analytical_joint_laws(tm
     assert float(np.squeeze(ext.E_star_sp)) / float(np.squeeze(base.E_star_sp)) == pytest.approx(0.875 ** -1.5, rel=1e-5)
     with pytest.raises(FemcheckError, match="already set"):
         extended_case_text(out.read_text(), str(out), results)
+
+
+def test_extended_case_cli_refuses_a_case_with_law_scale_before_any_fe(tmp_path, capsys):
+    """Bad input: --extended-case on a case that already sets [model.law_scale] exits 2 with one line naming the
+    file, before any joint FE runs, and writes nothing."""
+    from pathlib import Path
+    from femcheck.cli import main
+    case = tmp_path / "scaled.toml"
+    case.write_text(Path(CASE).read_text() + "\n[model.law_scale]\nsp = 1.1\n")
+    out = tmp_path / "ext.toml"
+    assert main(["check-joints", str(case), "--extended-case", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "already set" in err and str(case) in err and "Traceback" not in err
+    assert not out.exists()
