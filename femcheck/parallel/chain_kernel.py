@@ -178,23 +178,14 @@ def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
 
 @njit(cache=True, error_model="numpy")
 def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw):
-    """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0]."""
+    """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0] (:func:`_set_twist`, with the
+    freedom's axis and point carried by the pose's rotation Rp[k] and translation tp[k])."""
+    c = np.empty(3)
     for k in range(i_n[l, 0]):
         a, c0 = daxis[l, k], dpoint[l, k]
-        w0 = Rp[k, 0, 0] * a[0] + Rp[k, 0, 1] * a[1] + Rp[k, 0, 2] * a[2]
-        w1 = Rp[k, 1, 0] * a[0] + Rp[k, 1, 1] * a[1] + Rp[k, 1, 2] * a[2]
-        w2 = Rp[k, 2, 0] * a[0] + Rp[k, 2, 1] * a[1] + Rp[k, 2, 2] * a[2]
-        if dkind[l, k] == 0:
-            r0 = C[0] - (Rp[k, 0, 0] * c0[0] + Rp[k, 0, 1] * c0[1] + Rp[k, 0, 2] * c0[2] + tp[k, 0])
-            r1 = C[1] - (Rp[k, 1, 0] * c0[0] + Rp[k, 1, 1] * c0[1] + Rp[k, 1, 2] * c0[2] + tp[k, 1])
-            r2 = C[2] - (Rp[k, 2, 0] * c0[0] + Rp[k, 2, 1] * c0[1] + Rp[k, 2, 2] * c0[2] + tp[k, 2])
-            tw[k, 0] = w1 * r2 - w2 * r1
-            tw[k, 1] = w2 * r0 - w0 * r2
-            tw[k, 2] = w0 * r1 - w1 * r0
-            tw[k, 3], tw[k, 4], tw[k, 5] = w0, w1, w2
-        else:
-            tw[k, 0], tw[k, 1], tw[k, 2] = w0, w1, w2
-            tw[k, 3] = tw[k, 4] = tw[k, 5] = 0.0
+        for i in range(3):
+            c[i] = Rp[k, i, 0] * c0[0] + Rp[k, i, 1] * c0[1] + Rp[k, i, 2] * c0[2] + tp[k, i]
+        _set_twist(tw, k, Rp[k], a, C, c, dkind[l, k] == 0)
 
 
 # ---------------------------------------------------------------- closed forms
