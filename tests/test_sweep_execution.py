@@ -164,7 +164,7 @@ def test_worker_crash_loses_no_finished_chunk(case, ranges, reference, tmp_path)
 
 def test_cli_killed_by_signal_resumes(case, ranges, tmp_path):
     """A real `femcheck sweep` process killed with SIGKILL midway; --resume finishes it identically."""
-    n = 300  # one sample per task (--chunk 1): a few seconds of work, so the kill lands midway
+    n = 800  # one sample per task (--chunk 1): several seconds of work, so the kill lands midway under load too
     args = [sys.executable, "-m", "femcheck", "sweep", str(CASE), *sum((["--param", p] for p in PARAMS), []),
             "--design", "lhs", "--samples", str(n), "--points", "P0,P3,P7", "--jobs", "0", "--chunk", "1",
             "--no-report", "--out", str(tmp_path / "killed")]

@@ -24,7 +24,7 @@ from femcheck.sweep.store import SweepStore
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "haptic_6psu.toml"
 PARAMS = ["guideway.width_radial_m=0.010:0.020", "geometry.proximal_link_length_m=0.170:0.190"]
-N = 400  # one sample per task: seconds of work, so a signal lands midway
+N = 1000  # one sample per task: ~20 s of work at 2 jobs, so a signal lands midway even on a loaded machine
 
 
 def _args(out, *extra):
