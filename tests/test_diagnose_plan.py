@@ -66,6 +66,11 @@ def test_candidate_poses_are_reachable_well_conditioned_and_leave_the_cube():
     cube = cube_points(case)
     outside = np.any(np.abs(c.poses[9:, :3] - cube[0, :3]) > 0.5 * case.workspace.cube_edge_m + 1e-9, axis=1)
     assert outside.mean() > 0.5                            # most candidates lie outside the test cube
+    # tilted poses (reach and conditioning checked above): up to 10 deg about each axis, spread over the range
+    tilt = np.rad2deg(np.abs(c.poses[9:, 3:] - cube[0, 3:]))
+    assert tilt.max() <= 10.0 + 1e-9 and np.mean(tilt.max(axis=1) > 3.0) > 0.5
+    flat = candidate_poses(case, 20, seed=1, tilt_rad=0.0)
+    assert np.allclose(flat.poses[:, 3:], cube[0, 3:])      # tilt 0: the case's orientation only
     U, labels = unit_directions()
     assert U.shape == (26, 3) and np.allclose(np.linalg.norm(U, axis=1), 1.0)
     assert set(labels[:6]) == {"+x", "-x", "+y", "-y", "+z", "-z"} and len(set(labels)) == 26

@@ -24,16 +24,20 @@ def register(app: typer.Typer) -> None:
         rivals: int = typer.Option(5, "--rivals", min=2, max=10, help="most rival explanations to separate"),
         max_condition: float = typer.Option(None, "--max-condition", help="cond(J_h) limit of a planned pose (default 10)"),
         seed: int = typer.Option(0, "--seed", help="seed of the scrambled Sobol' pose sample"),
+        tilt_deg: float = typer.Option(None, "--tilt-deg", help="platform tilt sampled about each axis, deg "
+                                       "(default 10; 0: the case's orientation only)"),
         pose_table: Optional[str] = typer.Option(None, "--pose-table", metavar="PLAN.json",
                                                  help="pose table for point ids other than P0..P8: an earlier plan's JSON"),
     ):
         """Diagnose DATA.csv, take the top rival explanations (posterior-weighted) and propose the N measurements
         (pose in the reachable workspace, load direction, load level) that best separate them, with the expected
         posterior of the leading cause after them."""
+        import numpy as np
+
         from femcheck.cli import console
         from femcheck.diagnose import AnalyticalChainModel, diagnose
         from femcheck.diagnose.effects import effects as effect_registry
-        from femcheck.diagnose.plan import PLAN_MAX_CONDITION, plan_measurements
+        from femcheck.diagnose.plan import PLAN_MAX_CONDITION, TILT_RAD, plan_measurements
         from femcheck.measured import process, read_measured_csv
 
         if json_out and json_out != "-":
@@ -41,6 +45,9 @@ def register(app: typer.Typer) -> None:
             check_output_file(json_out, "--json")
             refuse_input_overwrite(json_out, [case_path, measured])
         limit = PLAN_MAX_CONDITION if max_condition is None else max_condition
+        tilt = TILT_RAD if tilt_deg is None else float(np.deg2rad(tilt_deg))
+        if not (tilt == tilt and 0.0 <= tilt <= np.pi / 2):
+            raise typer.BadParameter(f"--tilt-deg: {tilt_deg}; expected a number of degrees from 0 to 90")
         if not (limit == limit and 1.0 < limit < float("inf")):
             raise typer.BadParameter(f"--max-condition: {max_condition}; expected a finite number > 1")
         pool = None
@@ -60,7 +67,7 @@ def register(app: typer.Typer) -> None:
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         d = diagnose(m, readings, candidates=pool, with_baseline=False)
         p = plan_measurements(m, readings, d.weighing, budget=budget, n_poses=poses, rivals=rivals, seed=seed,
-                              max_condition=limit)
+                              max_condition=limit, tilt_rad=tilt)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), "model": d.model_name,
                   "verdict": d.verdict, "ambiguous": d.weighing.ambiguous, "ambiguity": d.weighing.ambiguity,
                   **p.as_json()}
@@ -80,11 +87,13 @@ def register(app: typer.Typer) -> None:
         con.print(r)
         t = Table(title=f"proposed measurements (preload {p.measurements[0].preload_N:g} N, then preload + load; "
                         f"{p.trials} trials; forces only)")
-        for h in ("#", "pose", "x mm", "y mm", "z mm", "cond", "direction", "u", "load N", "objective after"):
+        for h in ("#", "pose", "x mm", "y mm", "z mm", "orientation deg (rot. vector)", "cond", "direction", "u", "load N",
+                  "objective after"):
             t.add_column(h, justify="left" if h in ("pose", "direction", "u") else "right")
         for k, mm in enumerate(p.measurements, 1):
             x, y, z = (v * 1e3 for v in mm.pose[:3])
-            t.add_row(str(k), mm.pose_id, f"{x:.1f}", f"{y:.1f}", f"{z:.1f}", f"{mm.cond:.2f}", mm.direction_label,
+            rot = "(" + ", ".join(f"{v:+.1f}" for v in np.rad2deg(mm.pose[3:])) + ")"
+            t.add_row(str(k), mm.pose_id, f"{x:.1f}", f"{y:.1f}", f"{z:.1f}", rot, f"{mm.cond:.2f}", mm.direction_label,
                       "(" + ", ".join(f"{v:+.3f}" for v in mm.direction) + ")", f"{mm.load_N:g}", f"{mm.objective_after:.4f}")
         con.print(t)
         lead = "+".join(p.rivals[0]["ids"])

@@ -2,8 +2,10 @@
 of a diagnosis (issue 15 item 4; ``femcheck plan``).
 
 Candidates
-    *Poses* anywhere in the reachable workspace at the case's platform orientation: a scrambled Sobol' sample
-    of TCP positions in a box of ``±box_m`` around the nominal TCP, kept where every leg reaches
+    *Poses* anywhere in the reachable workspace: a scrambled Sobol' sample of TCP positions in a box of
+    ``±box_m`` around the nominal TCP and of platform orientations within ``±tilt_rad`` of the case's about each
+    world axis (rotation vector components; ``tilt_rad = 0`` keeps the case's orientation), kept where every leg
+    reaches
     (:func:`femcheck.kinematics.psu6.leg_geometry`) and the pose is well conditioned,
     cond(J_h) <= ``max_condition`` (:func:`femcheck.kinematics.conditioning.pose_conditioning`; the reference
     cube has 3.8-4.3), plus the nine cube points. *Load directions*: the 26 unit vectors of the axes, face and
@@ -51,6 +53,9 @@ log = logging.getLogger(__name__)
 PLAN_MAX_CONDITION = 10.0
 #: half-width (m) of the box around the nominal TCP in which poses are sampled (the reach check trims it)
 BOX_M = 0.15
+#: half-width (rad) of the platform tilt sampled about each axis (rotation-vector components): 10 deg, the
+#: orientation range a desktop haptic master is used in; the reach and conditioning checks trim it
+TILT_RAD = float(np.deg2rad(10.0))
 #: rivals whose posterior is below this are not planned for (they keep D = 0 in the expected posterior)
 MIN_RIVAL_PROBABILITY = 1e-3
 #: finite-difference step of the rival Jacobians, in the optimizer's scaled coordinates (value / typical or log10)
@@ -84,11 +89,12 @@ class CandidatePoses:
     n_drawn: int
 
 
-def candidate_poses(case, n_poses: int = 120, *, seed: int = 0, box_m: float = BOX_M,
+def candidate_poses(case, n_poses: int = 120, *, seed: int = 0, box_m: float = BOX_M, tilt_rad: float = TILT_RAD,
                     max_condition: float = PLAN_MAX_CONDITION) -> CandidatePoses:
     """The cube points plus up to ``n_poses`` reachable, well-conditioned poses sampled in the workspace
-    (scrambled Sobol' positions in nominal +- ``box_m``, the case's platform orientation). Vectorized: one
-    inverse-kinematics and one conditioning pass over all drawn positions."""
+    (scrambled Sobol' positions in nominal +- ``box_m`` and orientations within +- ``tilt_rad`` of the case's
+    about each axis, as rotation-vector increments; ``tilt_rad = 0``: the case's orientation). Vectorized: one
+    inverse-kinematics and one conditioning pass over all drawn poses."""
     from scipy.stats import qmc
 
     from femcheck.kinematics.conditioning import pose_conditioning
@@ -96,9 +102,14 @@ def candidate_poses(case, n_poses: int = 120, *, seed: int = 0, box_m: float = B
 
     cube = test_points(case)
     n_draw = int(2 ** np.ceil(np.log2(max(16 * n_poses, 16))))
-    u = qmc.Sobol(3, scramble=True, seed=seed).random(n_draw)
+    u = qmc.Sobol(6 if tilt_rad > 0 else 3, scramble=True, seed=seed).random(n_draw)
     poses = np.tile(cube[0], (n_draw, 1))
-    poses[:, :3] += (2.0 * u - 1.0) * box_m
+    poses[:, :3] += (2.0 * u[:, :3] - 1.0) * box_m
+    if tilt_rad > 0:
+        # compose the sampled tilt with the case's orientation (R = R_tilt R_case), as rotation vectors
+        from scipy.spatial.transform import Rotation
+        tilt = Rotation.from_rotvec((2.0 * u[:, 3:] - 1.0) * tilt_rad)
+        poses[:, 3:] = (tilt * Rotation.from_rotvec(cube[0, 3:])).as_rotvec()
     legs = leg_geometry(case, poses, check_reach=False)
     reach = np.all(np.isfinite(legs.slider), axis=1)
     cond = np.full(n_draw, np.inf)
@@ -300,7 +311,8 @@ class Plan:
 def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: int = 120, rivals: int = 5,
                       coverage: float = 0.95,
                       seed: int = 0, trials: int | None = None, load_levels_N=None,
-                      max_condition: float = PLAN_MAX_CONDITION, box_m: float = BOX_M) -> Plan:
+                      max_condition: float = PLAN_MAX_CONDITION, box_m: float = BOX_M,
+                      tilt_rad: float = TILT_RAD) -> Plan:
     """Propose ``budget`` measurements that best separate the top ``rivals`` explanations of ``weighing`` (the
     :class:`~femcheck.diagnose.evidence.Weighing` of a diagnosis, whose explanations carry their FitResult) given
     ``readings`` (module docstring)."""
@@ -327,7 +339,7 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
     bic_old = np.array([e.chi2 + e.n_params * np.log(n_old) for e in ex])
     kpar = np.array([e.n_params for e in ex], float)
 
-    cand = candidate_poses(case, n_poses, seed=seed, box_m=box_m, max_condition=max_condition)
+    cand = candidate_poses(case, n_poses, seed=seed, box_m=box_m, tilt_rad=tilt_rad, max_condition=max_condition)
     U, ulab = unit_directions()
     P, D, L = len(cand.ids), len(U), len(levels)
     pi, di, li = (a.ravel() for a in np.meshgrid(np.arange(P), np.arange(D), np.arange(L), indexing="ij"))
@@ -412,8 +424,8 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
     rivals_out = tuple({"ids": list(ex[i].ids) or ["none"], "probability": float(prob[i]),
                         "expected_posterior_if_true": float(post[a, a])} for a, i in enumerate(top))
     notes = ("forces only: the case states no fixture for applied moments and the reading model takes TCP forces",
-             f"poses at the case's platform orientation, sampled in nominal +- {box_m * 1e3:.0f} mm, reachable, "
-             f"cond(J_h) <= {max_condition:g}",
+             f"poses sampled in nominal +- {box_m * 1e3:.0f} mm and the case's orientation tilted by up to "
+             f"+- {np.rad2deg(tilt_rad):.0f} deg about each axis, reachable, cond(J_h) <= {max_condition:g}",
              "the expected posteriors assume the rival's fitted parameters are the truth and refit the others linearly; "
              f"rivals: the {K} leading explanations ({100 * float(prob[top].sum()):.1f} % of the posterior); expected "
              "posteriors are over them",
