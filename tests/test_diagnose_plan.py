@@ -183,6 +183,8 @@ def test_plan_cli_json_and_bad_input(setting, tmp_path, capsys):
     assert main(["diagnose", CASE, str(joined), "--pose-table", str(out), "--json", str(dj)]) == 0
     assert json.loads(dj.read_text())["residual"]["n_data"] == 3 * 4 * (len(SPARSE_POINTS) + BUDGET)
     assert main(["plan", CASE, str(csv), "--effects", "no_such_effect"]) == 2
+    assert main(["plan", CASE, str(csv), "--tilt-deg", "-3"]) == 2          # a negative tilt range
+    assert main(["plan", CASE, str(csv), "--tilt-deg", "nan"]) == 2
     assert "no_such_effect" in capsys.readouterr().err
     assert main(["plan", CASE, str(tmp_path / "missing.csv")]) == 2
     assert main(["plan", CASE, str(csv), "--json", str(csv)]) == 2
