@@ -649,6 +649,41 @@ def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
             Ae[b, a] = v
 
 
+@njit(cache=True, error_model="numpy")
+def _measured_law_form(l, p, m, ml_i, ml_S, C, cen, lR, Nb, scale, Ae, V):
+    """Ae (m, m) = N^T S_e N of leg l's FE-measured joint laws: N's wrenches carried to each joint centre J
+    (r = C - J) and into its link frame R, then the measured 6 x 6 compliance; times the element scale."""
+    for a in range(m):
+        for b in range(m):
+            Ae[a, b] = 0.0
+    f = scale[p, l, ml_i[l, 0, 2]]
+    for j in range(ml_i.shape[1]):
+        if ml_i[l, j, 0] < 0:
+            continue
+        R = lR[l, p, ml_i[l, j, 1]]
+        c = ml_i[l, j, 0]
+        r0 = C[l, p, 0] - cen[l, p, c, 0]
+        r1 = C[l, p, 1] - cen[l, p, c, 1]
+        r2 = C[l, p, 2] - cen[l, p, c, 2]
+        for a in range(m):
+            f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
+            m0 = Nb[3, a] + r1 * f2 - r2 * f1
+            m1 = Nb[4, a] + r2 * f0 - r0 * f2
+            m2 = Nb[5, a] + r0 * f1 - r1 * f0
+            for k in range(3):
+                V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
+                V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+        for a in range(m):
+            for b in range(a, m):
+                acc = 0.0
+                for i in range(6):
+                    for k in range(6):
+                        acc += V[a, i] * ml_S[l, j, i, k] * V[b, k]
+                Ae[a, b] += f * acc
+                if b != a:
+                    Ae[b, a] += f * acc
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _sym_add(K, E, M, m, sign, xv):
     """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
@@ -681,7 +716,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     L = i_n.shape[0]
     n = tcp.shape[0]
     nl = lk_i.shape[1]
-    n_slot = nl + 2
+    n_slot = nl + 3
+    ml_i, ml_S = tab[19], tab[20]   # FE-measured joint laws (kernel_tables._measured_law_tables)
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
     Ae = np.zeros((L, n_slot, 6, 6))
     slot_kind = np.full((L, n_slot), -1, np.int64)
@@ -794,6 +830,10 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                                 for b in range(m):
                                     Ae[l, ns, a, b] += ck * xi[a] * xi[b]
                     slot_kind[l, ns] = k_hl
+                    ns += 1
+                if ml_i[l, 0, 0] >= 0:
+                    _measured_law_form(l, p, m, ml_i, ml_S, C, cen, lR, Nb[l], scale, Ae[l, ns], V)
+                    slot_kind[l, ns] = ml_i[l, 0, 2]
                     ns += 1
             n_slots[l] = ns
             for a in range(m):

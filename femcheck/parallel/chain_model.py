@@ -9,7 +9,10 @@ carried to C_i (frame U) and the elements of a leg add in series, as in the 6-PS
   (a spring along the P axis, or about the R axis);
 - joint contact laws (detailed level): Hertz point contact of an S joint (translational ``I3 / k(F)``,
   linearized at the force of its own leg under the wrench, fixed point) and Hertz line contact + pin
-  bending of an R or U joint (translational, in the frame of the adjacent link).
+  bending of an R or U joint (translational, in the frame of the adjacent link);
+- an FE-measured joint law (detailed level): the joint contact FE's 6 x 6 compliance at the joint centre J in the
+  frame of the adjacent link, carried to C_i as a link is, ``Jf(C - J)^T Rot S_J Rot^T Jf(C - J)``; under
+  ``released`` the leg's wrenches have no moment about the joint's free axes, so those rotation entries drop out.
 
 Joint idealizations: ``rigid`` (passive joints carry moments and forces: the leg is a welded chain,
 ``K_i = S_i^-1``) and ``released`` (passive freedoms free: the leg carries only wrenches reciprocal to them,
@@ -91,6 +94,13 @@ def leg_element_compliances(device, state: DeviceState, model: str = "detailed")
                     R = s.link_R[:, m]
                     S[:, :3, :3] += np.einsum("nij,j,nkj->nik", R, np.array([c_uc, c_uc, c_uc + c_ub]), R)
                 parts["hertz_line"] = S
+            if leg.measured_law:
+                S = np.zeros((n, 6, 6))
+                for _, (S_J, c, m) in leg.measured_law.items():
+                    Q = rot6(s.link_R[:, m])
+                    to_C = twist_shift(s.C - s.centres[:, c])
+                    S += to_C @ Q @ S_J @ np.swapaxes(Q, -1, -2) @ np.swapaxes(to_C, -1, -2)
+                parts["measured_law"] = S
         out.append(parts)
     return out
 

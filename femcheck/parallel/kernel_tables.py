@@ -138,9 +138,26 @@ def _build(device) -> DeviceTables:
         if tw.size and np.linalg.matrix_rank(tw, tol=1e-9 * np.abs(tw).max()) < len(tw):
             released_ok = False
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
+    ml_i, ml_S = _measured_law_tables(device)
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home)
+           f_leg, b_plat, kinds, R_home, ml_i, ml_S)
     return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik)
+
+
+def _measured_law_tables(device):
+    """FE-measured joint laws: ml_i (L, nml, 3) centre, link, element kind (-1 padding); ml_S (L, nml, 6, 6) the
+    compliance at the joint centre in the link frame (``Leg.measured_law``)."""
+    legs = device.legs
+    nml = max(max(len(leg.measured_law) for leg in legs), 1)
+    ml_i = np.full((len(legs), nml, 3), -1, np.int64)
+    ml_S = np.zeros((len(legs), nml, 6, 6))
+    if any(leg.measured_law for leg in legs):
+        kind = device.element_names.index("measured_law")
+        for l, leg in enumerate(legs):
+            for j, (S, c, m) in enumerate(leg.measured_law.values()):
+                ml_i[l, j] = c, m, kind
+                ml_S[l, j] = S
+    return ml_i, ml_S
 
 
 def _rotvec_matrix(v):
