@@ -220,3 +220,62 @@ def test_example_case_stiffness_runs():
     doc = " ".join((ROOT / "docs" / "parallel_device.md").read_text().split())
     line = next(ln for ln in res.output.splitlines() if ln.startswith("directional stiffness"))
     assert " ".join(line.split()) in doc
+
+
+# ---------------------------------------------------------------- force ladder (load-dependent axial entry)
+LADDER = ROOT / "cases" / "laws" / "haptic_6psu_spherical_ladder_coarse.json"
+
+
+def test_hertz_ladder_reproduces_hertz_point():
+    """A ladder sampled from the Hertz approach delta = (9 F^2 / (16 E*^2 R))^(1/3) is one power law (p = 2/3), so
+    its tangent is the hertz_point tangent (6 E*^2 R F)^(1/3) exactly, and in a released hexapod (each ball loaded
+    along its strut) the fixed points agree: K_T to 1e-9 (the fixed point stops at 1e-12)."""
+    base = load_case(HEXAPOD)
+    E, R, F_min = base.device.legs[0].hertz_point[2]
+    F = np.geomspace(F_min, 200.0, 7)
+    d = (9.0 * F ** 2 / (16.0 * E ** 2 * R)) ** (1.0 / 3.0)
+    raw = _raw(HEXAPOD)
+    for leg in raw["legs"]:
+        j = leg["joints"][2]
+        del j["hertz_point"]
+        j["measured_law"] = {"compliance": np.diag([1e-6, 1e-6, 1e-6, 1.0, 1.0, 1.0]).tolist(),
+                             "loads_N": F.tolist(), "approach_m": d.tolist()}
+    law = build_case(raw, HEXAPOD)
+    P = _random_poses(base, 6, 13)
+    for W in (WRENCH, [0.0, 0.0, 60.0, 0.0, 0.0, 0.0], None):   # 60 N: beyond the floor in every leg
+        a = evaluate(base.device, P, W, joints="released")
+        b = evaluate(law.device, P, W, joints="released")
+        assert _rel(b.K, a.K) < RTOL
+        for key, k in a.hertz_stiffness.items():
+            np.testing.assert_allclose(b.hertz_stiffness[key], k, rtol=1e-9)
+
+
+def test_ladder_file_beam_fe_and_backends(measured):
+    # the ladder law written by femcheck.parallel.joint_law_file from the contact FE's force ladder
+    raw = json.loads(measured.raw_json)
+    for leg in raw["legs"]:
+        leg["joints"][2]["measured_law"] = {"file": str(LADDER), "frame": "link_after"}
+    case = build_case(raw, MEASURED)
+    assert case.device.legs[0].measured_ladder   # the file's ladder was read
+    P = cube_points(case)[[0, 3, 8]]
+    for joints in ("released", "rigid"):
+        r = evaluate(case.device, P, [0.0, 0.0, 15.0, 0.0, 0.0, 0.0], joints=joints)
+        c = evaluate(case.device, P, [0.0, 0.0, 15.0, 0.0, 0.0, 0.0], joints=joints, backend="compiled")
+        assert _rel(c.K, r.K) < RTOL   # the compiled path hands a ladder law to the numpy fixed point
+        K = device_fe_stiffness(case.device, P, joints=joints, hertz_stiffness=r.hertz_stiffness)
+        assert _rel(K, r.K) < 1e-8, joints   # beam FE at the converged axial tangent (fixed point 1e-12, rounding)
+    # a heavier load stiffens the ball (p < 1: tangent compliance falls with the force)
+    lo = evaluate(case.device, P[:1], [0.0, 0.0, 5.0, 0.0, 0.0, 0.0], joints="released").hertz_stiffness
+    hi = evaluate(case.device, P[:1], [0.0, 0.0, 50.0, 0.0, 0.0, 0.0], joints="released").hertz_stiffness
+    assert all(hi[k][0] > lo[k][0] for k in lo)
+
+
+def test_bad_ladder(tmp_path):
+    good = np.diag([1e-6, 1e-6, 1e-6, 1.0, 1.0, 1.0]).tolist()
+    m = _bad(tmp_path, {"compliance": good, "loads_N": [1.0, 2.0]})
+    assert "legs[1].joints[2].measured_law.approach_m" in m
+    m = _bad(tmp_path, {"compliance": good, "loads_N": [1.0, 2.0], "approach_m": [2e-6, 1e-6]})
+    assert "legs[1].joints[2].measured_law.approach_m" in m and "growing" in m
+    m = _bad(tmp_path, {"file": "lad.json"}, {"lad.json": json.dumps({"fe_compliance": good, "loads_N": [3.0, 1.0],
+                                                                      "approach_m": [1e-6, 2e-6]})})
+    assert "legs[1].joints[2].measured_law.file" in m and "increasing" in m

@@ -156,17 +156,40 @@ class MeasuredLaw:
     resolves against the case file's directory; ``joint`` picks the entry of a list with several) or ``compliance``
     inline. When the case loads, a file is read and inlined (``compliance`` and ``source``, the resolved path), so
     the case's document, its hash and its variants carry the measured numbers. ``frame``: the link whose frame is the
-    joint frame (default: the link before the joint, the one after it for the first joint, as ``hertz_line``)."""
+    joint frame (default: the link before the joint, the one after it for the first joint, as ``hertz_line``).
+
+    A force ladder (``loads_N`` with ``approach_m``, as :class:`femcheck.fe_device.joint_laws.MeasuredJointLaw`; in
+    the file or inline) makes the axial entry load-dependent: the tangent ``d delta / dF`` of the piecewise power
+    law through the ladder, at the joint's own axial force (fixed point, as ``hertz_point``). A ``check-joints``
+    file's ``loads_N`` without ``approach_m`` are its two eq. 1 levels, not a ladder, and are not read."""
     file: str | None = option(None, doc="check-joints JSON with fe_compliance (relative to the case file)")
     joint: Literal["spherical", "universal"] | None = option(None, doc="entry of a multi-joint check-joints JSON")
     compliance: tuple[tuple[float, ...], ...] | None = quantity("m/N, m/(N m), rad/(N m)", check="any", default=None,
                                                                doc="6 x 6 compliance in the joint frame (inline)")
     frame: Literal["link_before", "link_after"] | None = option(None, doc="link whose frame is the joint frame")
     source: str = option("", doc="where the numbers come from (set to the resolved file when a file is inlined)")
+    loads_N: tuple[float, ...] | None = quantity("N", default=None, doc="force ladder (with approach_m, inline)")
+    approach_m: tuple[float, ...] | None = quantity("m", default=None, doc="joint approach at each ladder force")
 
     def __post_init__(self):
         if (self.file is None) == (self.compliance is None):
             raise ValueError("file: give exactly one of file (a check-joints JSON) or compliance (6 x 6 inline)")
+        if self.file is not None and (self.loads_N is not None or self.approach_m is not None):
+            raise ValueError("loads_N: a ladder goes with an inline compliance; a file brings its own")
+        _check_ladder(self.loads_N, self.approach_m)
+
+
+def _check_ladder(F, d) -> None:
+    """A force ladder: both or neither; >= 2 increasing positive forces, approach positive and growing with them."""
+    if F is None and d is None:
+        return
+    if F is None or d is None:
+        raise ValueError(f"{'loads_N' if F is None else 'approach_m'}: a ladder needs both loads_N and approach_m")
+    F, d = np.asarray(F, float), np.asarray(d, float)
+    if F.ndim != 1 or F.size < 2 or np.any(np.diff(F) <= 0):
+        raise ValueError("loads_N: expected >= 2 increasing positive forces")
+    if d.shape != F.shape or np.any(d <= 0) or np.any(np.diff(d) <= 0):
+        raise ValueError("approach_m: expected one positive approach per force, growing with the force")
 
 
 @dataclass(frozen=True)
@@ -345,7 +368,9 @@ def _law_from_file(ctx: Context, key: str, who: str, law: MeasuredLaw):
                 f"{len(entries)} entries with fe_compliance; pick one with joint = \"spherical\" | \"universal\"")
         raise ctx.error(f"{key}.joint" if entries else f"{key}.file", f"{who}: {str(path)!r} has {what} "
                         "(expected the JSON of femcheck check-joints --json)")
-    return entries[0]["fe_compliance"], str(path.resolve())
+    e = entries[0]
+    ladder = (e.get("loads_N"), e.get("approach_m")) if "approach_m" in e else (None, None)
+    return e["fe_compliance"], ladder, str(path.resolve())
 
 
 def _law_matrix(ctx: Context, key: str, who: str, value) -> np.ndarray:
@@ -393,11 +418,19 @@ def _with_measured_laws(ctx: Context, i: int, leg: LegSpec, leg_raw: dict) -> Le
         if law.frame == "link_after" and c == len(centred) - 1:
             raise ctx.error(f"{key}.frame", f"{who}: the last joint has no link after it; use link_before")
         if law.file is not None:
-            value, source = _law_from_file(ctx, key, who, law)
+            value, (F, d), source = _law_from_file(ctx, key, who, law)
             S = _law_matrix(ctx, f"{key}.file", who, value)
-            law = dataclasses.replace(law, file=None, joint=None, source=source,
+            try:
+                _check_ladder(F, d)
+                F = None if F is None else tuple(float(v) for v in F)
+                d = None if d is None else tuple(float(v) for v in d)
+            except (ValueError, TypeError) as exc:
+                raise ctx.error(f"{key}.file", f"{who}: {source!r}: {exc}") from None
+            law = dataclasses.replace(law, file=None, joint=None, source=source, loads_N=F, approach_m=d,
                                       compliance=tuple(tuple(float(v) for v in row) for row in S))
             inline = {"compliance": [list(r) for r in law.compliance], "source": source}
+            if F is not None:
+                inline.update(loads_N=list(F), approach_m=list(d))
             if law.frame is not None:
                 inline["frame"] = law.frame
             leg_raw["joints"][k]["measured_law"] = inline

@@ -97,6 +97,10 @@ def _joint_columns(leg, li, k, p, state: DeviceState, model, joints, hertz_stiff
     if model == "detailed" and k in leg.measured_law:
         # S_J = V diag(c) V^T in the link frame: one spring 1/c_a per eigen-twist, turned into frame U
         S_J, _, m = leg.measured_law[k]
+        if k in leg.measured_ladder:   # the axial tangent of the chain model's fixed point (hertz_stiffness)
+            d = np.ones(6)
+            d[2] = np.sqrt(1.0 / (hertz_stiffness[li, k][p] * S_J[2, 2]))
+            S_J = S_J * d[:, None] * d[None, :]
         R = s.link_R[p, m]
         c, V = np.linalg.eigh(S_J)
         for a in range(6):
@@ -142,7 +146,7 @@ def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str =
     if parts not in ("beam", "solid"):
         raise ValueError(f"parts = {parts!r}; expected beam or solid")
     state = state if state is not None else solve_legs(device, poses)
-    if model == "detailed" and any(leg.hertz_point for leg in device.legs) and hertz_stiffness is None:
+    if model == "detailed" and any(leg.hertz_point or leg.measured_ladder for leg in device.legs) and hertz_stiffness is None:
         raise ValueError("hertz_stiffness: required for the detailed model (the Hertz contacts' linearization)")
     out = np.empty((state.n, 6, 6))
     for p in range(state.n):  # one FE model per pose (each pose is a different mesh)

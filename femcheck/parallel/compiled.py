@@ -78,12 +78,15 @@ def _packed(device, state):
 def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
     """The chain model by :func:`femcheck.parallel.chain_kernel.chain_kernel`: (K, S, t, leg stiffness, leg
     wrench, element energy, hertz stiffness dict, iterations), or None where the kernel does not cover the
-    device (released joints with dependent passive twists: the numpy path then runs)."""
+    device (released joints with dependent passive twists, measured joint laws with a force ladder: the numpy
+    path then runs)."""
     from femcheck.errors import ConvergenceError
     from femcheck.parallel import chain_kernel as kern
     tb = device_tables(device)
     if joints == "released" and not tb.released_ok:
         return None
+    if model == "detailed" and any(leg.measured_ladder for leg in device.legs):
+        return None   # measured laws with a force ladder: the numpy fixed point (not in the kernel yet)
     n, L = state.n, device.n_legs
     C, cen, tw, lR, llen = _packed(device, state)
     K = np.empty((n, 6, 6))
