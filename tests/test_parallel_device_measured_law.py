@@ -243,11 +243,12 @@ def test_hertz_ladder_reproduces_hertz_point():
     law = build_case(raw, HEXAPOD)
     P = _random_poses(base, 6, 13)
     for W in (WRENCH, [0.0, 0.0, 60.0, 0.0, 0.0, 0.0], None):   # 60 N: beyond the floor in every leg
-        a = evaluate(base.device, P, W, joints="released")
-        b = evaluate(law.device, P, W, joints="released")
-        assert _rel(b.K, a.K) < RTOL
-        for key, k in a.hertz_stiffness.items():
-            np.testing.assert_allclose(b.hertz_stiffness[key], k, rtol=1e-9)
+        for backend in ("numpy", "compiled"):
+            a = evaluate(base.device, P, W, joints="released", backend=backend)
+            b = evaluate(law.device, P, W, joints="released", backend=backend)
+            assert _rel(b.K, a.K) < RTOL, backend
+            for key, k in a.hertz_stiffness.items():
+                np.testing.assert_allclose(b.hertz_stiffness[key], k, rtol=1e-9)
 
 
 def test_ladder_file_beam_fe_and_backends(measured):
@@ -259,15 +260,44 @@ def test_ladder_file_beam_fe_and_backends(measured):
     assert case.device.legs[0].measured_ladder   # the file's ladder was read
     P = cube_points(case)[[0, 3, 8]]
     for joints in ("released", "rigid"):
-        r = evaluate(case.device, P, [0.0, 0.0, 15.0, 0.0, 0.0, 0.0], joints=joints)
-        c = evaluate(case.device, P, [0.0, 0.0, 15.0, 0.0, 0.0, 0.0], joints=joints, backend="compiled")
-        assert _rel(c.K, r.K) < RTOL   # the compiled path hands a ladder law to the numpy fixed point
+        r = evaluate(case.device, P, [0.0, 0.0, 15.0, 0.0, 0.0, 0.0], joints=joints, backend="numpy")
         K = device_fe_stiffness(case.device, P, joints=joints, hertz_stiffness=r.hertz_stiffness)
         assert _rel(K, r.K) < 1e-8, joints   # beam FE at the converged axial tangent (fixed point 1e-12, rounding)
     # a heavier load stiffens the ball (p < 1: tangent compliance falls with the force)
     lo = evaluate(case.device, P[:1], [0.0, 0.0, 5.0, 0.0, 0.0, 0.0], joints="released").hertz_stiffness
     hi = evaluate(case.device, P[:1], [0.0, 0.0, 50.0, 0.0, 0.0, 0.0], joints="released").hertz_stiffness
     assert all(hi[k][0] > lo[k][0] for k in lo)
+
+
+def test_ladder_numpy_and_compiled_agree():
+    """The kernel's ladder legs (refactored at every fixed-point iteration) against the numpy fixed point: the 6-PSU
+    legs with the ladder ball law, and a hexapod with a ladder on the base U joint next to the Hertz ball of the
+    same leg, random poses and element scales, both idealizations: 1e-9 (both stop the fixed point at 1e-12)."""
+    raw = json.loads(load_case(MEASURED).raw_json)
+    for leg in raw["legs"]:
+        leg["joints"][2]["measured_law"] = {"file": str(LADDER), "frame": "link_after"}
+    psu = build_case(raw, MEASURED)
+    doc = json.loads(LADDER.read_text())
+    raw = _raw(HEXAPOD)
+    for leg in raw["legs"]:
+        j = leg["joints"][0]
+        del j["hertz_line"]
+        j["measured_law"] = {k: doc[k] for k in ("loads_N", "approach_m")} | {"compliance": doc["fe_compliance"]}
+    hexa = build_case(raw, HEXAPOD)
+    rng = np.random.default_rng(17)
+    for case in (psu, hexa):
+        dev = case.device
+        P = _random_poses(case, 8, 19)
+        scale = rng.uniform(0.5, 2.0, (dev.n_legs, len(dev.element_names)))
+        for joints in ("released", "rigid"):
+            for es in (None, scale):
+                a = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="numpy")
+                b = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="compiled")
+                for name in ("K", "S", "twist", "leg_wrench", "element_energy"):
+                    assert _rel(getattr(b, name), getattr(a, name)) < RTOL, (case.meta.name, joints, name)
+                assert a.hertz_stiffness.keys() == b.hertz_stiffness.keys()
+                for key in a.hertz_stiffness:
+                    np.testing.assert_allclose(b.hertz_stiffness[key], a.hertz_stiffness[key], rtol=RTOL)
 
 
 def test_bad_ladder(tmp_path):

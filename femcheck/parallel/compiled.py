@@ -78,15 +78,12 @@ def _packed(device, state):
 def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
     """The chain model by :func:`femcheck.parallel.chain_kernel.chain_kernel`: (K, S, t, leg stiffness, leg
     wrench, element energy, hertz stiffness dict, iterations), or None where the kernel does not cover the
-    device (released joints with dependent passive twists, measured joint laws with a force ladder: the numpy
-    path then runs)."""
+    device (released joints with dependent passive twists: the numpy path then runs)."""
     from femcheck.errors import ConvergenceError
     from femcheck.parallel import chain_kernel as kern
     tb = device_tables(device)
     if joints == "released" and not tb.released_ok:
         return None
-    if model == "detailed" and any(leg.measured_ladder for leg in device.legs):
-        return None   # measured laws with a force ladder: the numpy fixed point (not in the kernel yet)
     n, L = state.n, device.n_legs
     C, cen, tw, lR, llen = _packed(device, state)
     K = np.empty((n, 6, 6))
@@ -97,9 +94,10 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
     energy = np.empty((n, L, tb.n_elem))
     kh = np.full((n, L, tb.hp_joint.shape[1]), np.nan)
     iters = np.zeros(n, dtype=np.int64)
+    kl = np.full((n, L, tb.ml_joint.shape[1]), np.nan)
     status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
                                lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
-                               np.ascontiguousarray(scale), K, S, t, KL, WC, energy, kh, iters)
+                               np.ascontiguousarray(scale), K, S, t, KL, WC, energy, kh, iters, kl)
     if status < 0:
         raise np.linalg.LinAlgError(f"leg or platform stiffness not positive definite at pose #{-status - 1}")
     if status:
@@ -111,4 +109,7 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
             for j, joint in enumerate(tb.hp_joint[l]):
                 if joint >= 0:
                     hertz[l, int(joint)] = kh[:, l, j]
+            for j, joint in enumerate(tb.ml_joint[l]):   # measured laws with a force ladder: axial tangent
+                if joint >= 0 and not np.isnan(kl[0, l, j]):
+                    hertz[l, int(joint)] = kl[:, l, j]
     return K, S, t, KL, WC, energy, hertz, int(iters.max(initial=1))
