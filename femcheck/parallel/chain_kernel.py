@@ -720,11 +720,11 @@ def _sym_add(K, E, M, m, sign, xv):
 
 @njit(cache=True, error_model="numpy")
 def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
-                 K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, kl_out):
+                 K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """Evaluate n poses. State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
     scale (n, L, E). Outputs K, S (n, 6, 6), t (n, 6), leg stiffness (n, L, 6, 6), leg wrench (n, L, 6),
-    element energy (n, L, E), Hertz point stiffness (n, L, nhp), iterations (n,), axial tangent stiffness of the
-    measured laws with a force ladder (n, L, nml; mode 3 legs). Returns 0; 1 + p if the
+    element energy (n, L, E), Hertz point stiffness (n, L, nhp + nml: then the axial tangent stiffness of the
+    measured laws with a force ladder, mode 3 legs), iterations (n,). Returns 0; 1 + p if the
     fixed point of pose p did not converge; -1 - p if a leg or platform matrix of pose p is not positive definite.
 
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
@@ -736,7 +736,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     n = tcp.shape[0]
     nl = lk_i.shape[1]
     n_slot = nl + 4
-    ml_i, ml_S, ml_n, ml_F, ml_d = tab[19], tab[20], tab[21], tab[22], tab[23]   # kernel_tables._measured_law_tables
+    ml_i, ml_S, ml_n, ml_F, ml_d = tab[-1]   # FE-measured joint laws (kernel_tables._measured_law_tables)
     cl = np.zeros((L, ml_i.shape[1]))     # current axial compliance of the ladder laws
     lad_slot = np.full(L, -1, np.int64)   # slot of a leg's ladder laws (mode 3: refactored every iteration)
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
@@ -1049,8 +1049,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             for j in range(i_n[l, 4] if detailed else 0):
                 kh_out[p, l, j] = kh[l, j]
             for j in range(ml_i.shape[1]):
-                if detailed and ml_n[l, j] > 0:
-                    kl_out[p, l, j] = 1.0 / cl[l, j]
+                if detailed and ml_n[l, j] > 0:   # after the Hertz point stiffnesses
+                    kh_out[p, l, hp.shape[1] + j] = 1.0 / cl[l, j]
             # y = A_c^-1 E^T t (W_C = N y) and A_c^-1 (the leg stiffness N A_c^-1 N^T)
             for a in range(m):
                 acc = 0.0

@@ -92,12 +92,11 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
     KL = np.empty((n, L, 6, 6))
     WC = np.empty((n, L, 6))
     energy = np.empty((n, L, tb.n_elem))
-    kh = np.full((n, L, tb.hp_joint.shape[1]), np.nan)
+    kh = np.full((n, L, tb.hp_joint.shape[1] + tb.ml_joint.shape[1]), np.nan)   # Hertz points, then ladder laws
     iters = np.zeros(n, dtype=np.int64)
-    kl = np.full((n, L, tb.ml_joint.shape[1]), np.nan)
     status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
                                lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
-                               np.ascontiguousarray(scale), K, S, t, KL, WC, energy, kh, iters, kl)
+                               np.ascontiguousarray(scale), K, S, t, KL, WC, energy, kh, iters)
     if status < 0:
         raise np.linalg.LinAlgError(f"leg or platform stiffness not positive definite at pose #{-status - 1}")
     if status:
@@ -110,6 +109,6 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
                 if joint >= 0:
                     hertz[l, int(joint)] = kh[:, l, j]
             for j, joint in enumerate(tb.ml_joint[l]):   # measured laws with a force ladder: axial tangent
-                if joint >= 0 and not np.isnan(kl[0, l, j]):
-                    hertz[l, int(joint)] = kl[:, l, j]
+                if joint >= 0 and not np.isnan(kh[0, l, tb.hp_joint.shape[1] + j]):
+                    hertz[l, int(joint)] = kh[:, l, tb.hp_joint.shape[1] + j]
     return K, S, t, KL, WC, energy, hertz, int(iters.max(initial=1))

@@ -27,7 +27,8 @@ class DeviceTables:
 
     ``tab``: the tuple handed to the kernels; ``released_ok``: every leg's passive twists are independent at
     the home pose (the kernels' Householder null space needs it; otherwise released joints use numpy);
-    ``hp_joint`` (L, nhp): joint index of each Hertz point contact (-1 padding).
+    ``hp_joint`` (L, nhp): joint index of each Hertz point contact (-1 padding); ``ml_joint`` (L, nml): of each
+    measured joint law (its axial tangent, for a force ladder, follows the Hertz stiffnesses in the kernel's output).
     """
 
     tab: tuple
@@ -142,7 +143,7 @@ def _build(device) -> DeviceTables:
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
     ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint = _measured_law_tables(device)
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home, ml_i, ml_S, ml_n, ml_F, ml_d)
+           f_leg, b_plat, kinds, R_home, (ml_i, ml_S, ml_n, ml_F, ml_d))   # measured laws: keep them last (tab[-1])
     return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik,
                         ml_joint=ml_joint)
 
