@@ -12,7 +12,7 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
     [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
         joints[k]  type = "R" | "U" | "S" | "P" | "F" (a clamp, first joint only), actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
                    P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
-                   hertz_point (S), hertz_line (R/U)
+                   hertz_point (S), hertz_line (R/U), measured_law (S/U/R: a contact-FE compliance, file or inline)
         links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
                    "rigid", material, outer/inner_diameter_m (tube), width_m/depth_m (bar), x_axis (section x)
 
@@ -147,6 +147,52 @@ class HertzLine:
 
 
 @dataclass(frozen=True)
+class MeasuredLaw:
+    """A joint's compliance measured by the joint contact FE (``femcheck check-joints --json``): the constant 6 x 6
+    ``fe_compliance`` (SI: m/N, m/(N m), rad/(N m)) at the joint centre, in the joint frame x, y lateral, z axial
+    (the adjacent link's axis), rotations theta_x, theta_y (tilt / pin axes), theta_z (spin).
+
+    Give ``file`` (a ``check-joints`` JSON, a list of results or one object with ``fe_compliance``; a relative path
+    resolves against the case file's directory; ``joint`` picks the entry of a list with several) or ``compliance``
+    inline. When the case loads, a file is read and inlined (``compliance`` and ``source``, the resolved path), so
+    the case's document, its hash and its variants carry the measured numbers. ``frame``: the link whose frame is the
+    joint frame (default: the link before the joint, the one after it for the first joint, as ``hertz_line``).
+
+    A force ladder (``loads_N`` with ``approach_m``, as :class:`femcheck.fe_device.joint_laws.MeasuredJointLaw`; in
+    the file or inline) makes the axial entry load-dependent: the tangent ``d delta / dF`` of the piecewise power
+    law through the ladder, at the joint's own axial force (fixed point, as ``hertz_point``). A ``check-joints``
+    file's ``loads_N`` without ``approach_m`` are its two eq. 1 levels, not a ladder, and are not read."""
+    file: str | None = option(None, doc="check-joints JSON with fe_compliance (relative to the case file)")
+    joint: Literal["spherical", "universal"] | None = option(None, doc="entry of a multi-joint check-joints JSON")
+    compliance: tuple[tuple[float, ...], ...] | None = quantity("m/N, m/(N m), rad/(N m)", check="any", default=None,
+                                                               doc="6 x 6 compliance in the joint frame (inline)")
+    frame: Literal["link_before", "link_after"] | None = option(None, doc="link whose frame is the joint frame")
+    source: str = option("", doc="where the numbers come from (set to the resolved file when a file is inlined)")
+    loads_N: tuple[float, ...] | None = quantity("N", default=None, doc="force ladder (with approach_m, inline)")
+    approach_m: tuple[float, ...] | None = quantity("m", default=None, doc="joint approach at each ladder force")
+
+    def __post_init__(self):
+        if (self.file is None) == (self.compliance is None):
+            raise ValueError("file: give exactly one of file (a check-joints JSON) or compliance (6 x 6 inline)")
+        if self.file is not None and (self.loads_N is not None or self.approach_m is not None):
+            raise ValueError("loads_N: a ladder goes with an inline compliance; a file brings its own")
+        _check_ladder(self.loads_N, self.approach_m)
+
+
+def _check_ladder(F, d) -> None:
+    """A force ladder: both or neither; >= 2 increasing positive forces, approach positive and growing with them."""
+    if F is None and d is None:
+        return
+    if F is None or d is None:
+        raise ValueError(f"{'loads_N' if F is None else 'approach_m'}: a ladder needs both loads_N and approach_m")
+    F, d = np.asarray(F, float), np.asarray(d, float)
+    if F.ndim != 1 or F.size < 2 or np.any(np.diff(F) <= 0):
+        raise ValueError("loads_N: expected >= 2 increasing positive forces")
+    if d.shape != F.shape or np.any(d <= 0) or np.any(np.diff(d) <= 0):
+        raise ValueError("approach_m: expected one positive approach per force, growing with the force")
+
+
+@dataclass(frozen=True)
 class JointSpec:
     type: Literal["R", "U", "S", "P", "F"] = option(
         doc="revolute, universal, spherical, prismatic; F: a fixed clamp (only first: the leg starts with a clamped link)")
@@ -158,6 +204,7 @@ class JointSpec:
     drive: Drive | None = option(None)
     hertz_point: HertzPoint | None = option(None)
     hertz_line: HertzLine | None = option(None)
+    measured_law: MeasuredLaw | None = option(None)
 
     def __post_init__(self):
         if self.type == "P" and self.point_m is not None:
@@ -178,6 +225,8 @@ class JointSpec:
             raise ValueError("hertz_point: only on an S joint")
         if self.hertz_line is not None and self.type not in ("R", "U"):
             raise ValueError("hertz_line: only on an R or U joint")
+        if self.measured_law is not None and self.type not in ("R", "U", "S"):
+            raise ValueError("measured_law: only on an R, U or S joint")
         n_axes = {"R": (1,), "U": (1, 2), "S": (3,), "P": (1,), "F": (0,)}[self.type]
         if self.axes is not None and len(self.axes) not in n_axes:
             raise ValueError(f"axes: {len(self.axes)} given; a {self.type} joint takes {' or '.join(map(str, n_axes))}")
@@ -296,8 +345,104 @@ def _check_leg(ctx: Context, i: int, leg: LegSpec) -> None:
         raise ctx.error(f"{where}.joints", f"{who} has {dof} joint freedoms; a leg needs at least 3")
 
 
+def _law_from_file(ctx: Context, key: str, who: str, law: MeasuredLaw):
+    """(6, 6) ``fe_compliance`` of the check-joints JSON ``law.file`` (resolved against the case file's directory)
+    and the resolved path; a one-line error naming the leg, joint and key otherwise."""
+    import json
+    from pathlib import Path
+    base = Path(str(ctx.path)).parent if ctx.path is not None else Path(".")
+    path = Path(law.file).expanduser()
+    path = path if path.is_absolute() else base / path
+    if not path.is_file():
+        raise ctx.error(f"{key}.file", f"{who}: joint law file {str(path)!r} not found")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ctx.error(f"{key}.file", f"{who}: {str(path)!r} is not a JSON file ({exc})") from None
+    entries = doc if isinstance(doc, list) else [doc]
+    entries = [e for e in entries if isinstance(e, dict) and "fe_compliance" in e]
+    if law.joint is not None:
+        entries = [e for e in entries if e.get("joint") == law.joint]
+    if len(entries) != 1:
+        what = (f"no entry with fe_compliance{f' for joint {law.joint!r}' if law.joint else ''}" if not entries else
+                f"{len(entries)} entries with fe_compliance; pick one with joint = \"spherical\" | \"universal\"")
+        raise ctx.error(f"{key}.joint" if entries else f"{key}.file", f"{who}: {str(path)!r} has {what} "
+                        "(expected the JSON of femcheck check-joints --json)")
+    e = entries[0]
+    ladder = (e.get("loads_N"), e.get("approach_m")) if "approach_m" in e else (None, None)
+    return e["fe_compliance"], ladder, str(path.resolve())
+
+
+def _law_matrix(ctx: Context, key: str, who: str, value) -> np.ndarray:
+    """The 6 x 6 compliance ``value`` checked: finite, symmetric (to 1e-6 of its largest entry), positive definite."""
+    try:
+        S = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ctx.error(key, f"{who}: the compliance is not a 6 x 6 matrix of numbers "
+                             "(null entries, a mechanism, are not accepted)") from None
+    if S.shape != (6, 6):
+        raise ctx.error(key, f"{who}: the compliance has shape {S.shape}; expected 6 x 6 (SI, joint frame)")
+    if not np.all(np.isfinite(S)):
+        raise ctx.error(key, f"{who}: the compliance has entries that are not finite")
+    scale = np.abs(S).max()
+    if scale == 0.0 or np.abs(S - S.T).max() > 1e-6 * scale:
+        raise ctx.error(key, f"{who}: the compliance is not symmetric (max |S - S^T| = {np.abs(S - S.T).max():.3g}, "
+                             f"largest entry {scale:.3g})")
+    S = 0.5 * (S + S.T)
+    d = np.diag(S)
+    # positive definite: the diagonal, then the unit-free correlation matrix (entries mix m/N and rad/(N m))
+    ok = bool(np.all(d > 0))
+    if ok:
+        D = 1.0 / np.sqrt(d)
+        ok = bool(np.linalg.eigvalsh(D[:, None] * S * D[None, :]).min() > 1e-12)
+    if not ok:
+        raise ctx.error(key, f"{who}: the compliance is not positive definite")
+    return S
+
+
+def _with_measured_laws(ctx: Context, i: int, leg: LegSpec, leg_raw: dict) -> LegSpec:
+    """Read and check every ``measured_law`` of leg ``i``; a file is inlined into the leg and into ``leg_raw`` (the
+    case document, so its hash and its variants carry the numbers: :class:`MeasuredLaw`)."""
+    import dataclasses
+    joints = list(leg.joints)
+    centred = [k for k, jt in enumerate(joints) if jt.type != "P"]
+    for k, jt in enumerate(joints):
+        law = jt.measured_law
+        if law is None:
+            continue
+        key = f"legs[{i}].joints[{k}].measured_law"
+        who = f"leg {i} ({leg.name!r}), joint {k} ({jt.type})"
+        c = centred.index(k)
+        if law.frame == "link_before" and c == 0:
+            raise ctx.error(f"{key}.frame", f"{who}: the first joint has no link before it; use link_after")
+        if law.frame == "link_after" and c == len(centred) - 1:
+            raise ctx.error(f"{key}.frame", f"{who}: the last joint has no link after it; use link_before")
+        if law.file is not None:
+            value, (F, d), source = _law_from_file(ctx, key, who, law)
+            S = _law_matrix(ctx, f"{key}.file", who, value)
+            try:
+                _check_ladder(F, d)
+                F = None if F is None else tuple(float(v) for v in F)
+                d = None if d is None else tuple(float(v) for v in d)
+            except (ValueError, TypeError) as exc:
+                raise ctx.error(f"{key}.file", f"{who}: {source!r}: {exc}") from None
+            law = dataclasses.replace(law, file=None, joint=None, source=source, loads_N=F, approach_m=d,
+                                      compliance=tuple(tuple(float(v) for v in row) for row in S))
+            inline = {"compliance": [list(r) for r in law.compliance], "source": source}
+            if F is not None:
+                inline.update(loads_N=list(F), approach_m=list(d))
+            if law.frame is not None:
+                inline["frame"] = law.frame
+            leg_raw["joints"][k]["measured_law"] = inline
+        else:
+            _law_matrix(ctx, f"{key}.compliance", who, law.compliance)
+        joints[k] = dataclasses.replace(jt, measured_law=law)
+    return dataclasses.replace(leg, joints=tuple(joints))
+
+
 def build(raw: dict, path) -> ParallelDeviceCase:
-    """Validate a parsed TOML document into a :class:`ParallelDeviceCase` (errors name the file, key and leg)."""
+    """Validate a parsed TOML document into a :class:`ParallelDeviceCase` (errors name the file, key and leg).
+    A ``measured_law`` file is read here and inlined into ``raw`` (:class:`MeasuredLaw`)."""
     ctx = Context(path)
     ctx.materials = build_materials(ctx, raw.get("materials"))
     parts = build_sections(ctx, raw, SECTIONS, optional=("meta", "model", "symmetry", "loads"),
@@ -308,6 +453,7 @@ def build(raw: dict, path) -> ParallelDeviceCase:
     legs = tuple(build_section(ctx, f"legs[{i}]", LegSpec, t) for i, t in enumerate(legs_raw))
     for i, leg in enumerate(legs):
         _check_leg(ctx, i, leg)
+    legs = tuple(_with_measured_laws(ctx, i, leg, legs_raw[i]) for i, leg in enumerate(legs))
     case = ParallelDeviceCase(materials=tuple(ctx.materials.values()), legs=legs, **parts)
     # resolve the legs once: the home configuration must close (platform attachment consistent) and every
     # test point be reachable; the error names the first leg that is not

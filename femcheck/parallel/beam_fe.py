@@ -5,7 +5,8 @@ for shear), split at the middle where a P joint sits in it. Each joint is a pair
 whose twists differ by ``B y``: the columns of B are the joint's released freedoms (unit twists ``[0; w]`` of
 its rotations, ``[u; 0]`` of a slide; free, only with ``released`` joints), its drive (``detailed``: a spring
 of stiffness 1/c on the actuated freedom) and its contact law (``detailed``: translational springs, Hertz
-point contact at the analytical model's linearization, or line contact + pin bending in the link frame);
+point contact at the analytical model's linearization, or line contact + pin bending in the link frame; an
+FE-measured law as six springs along the eigen-twists of its 6 x 6 compliance in the link frame);
 every other relative motion is locked. The base side of the first joint is fixed; the platform is rigid, so
 the platform side of each last joint moves with the TCP twist (``G_i t_T``). The nodes are expressed by a
 master-slave transformation (exact, no penalty) and everything but the TCP twist is condensed out:
@@ -93,6 +94,17 @@ def _joint_columns(leg, li, k, p, state: DeviceState, model, joints, hertz_stiff
         R = s.link_R[p, m]
         for a, c in enumerate((c_uc, c_uc, c_uc + c_ub)):
             cols.append(np.concatenate([R[:, a], np.zeros(3)])), ks.append(1.0 / c)
+    if model == "detailed" and k in leg.measured_law:
+        # S_J = V diag(c) V^T in the link frame: one spring 1/c_a per eigen-twist, turned into frame U
+        S_J, _, m = leg.measured_law[k]
+        if k in leg.measured_ladder:   # the axial tangent of the chain model's fixed point (hertz_stiffness)
+            d = np.ones(6)
+            d[2] = np.sqrt(1.0 / (hertz_stiffness[li, k][p] * S_J[2, 2]))
+            S_J = S_J * d[:, None] * d[None, :]
+        R = s.link_R[p, m]
+        c, V = np.linalg.eigh(S_J)
+        for a in range(6):
+            cols.append(np.concatenate([R @ V[:3, a], R @ V[3:, a]])), ks.append(1.0 / c[a])
     if not cols:
         return np.zeros((6, 0)), np.zeros(0)
     return np.array(cols).T, np.array(ks)
@@ -134,7 +146,7 @@ def device_fe_stiffness(device, poses, *, model: str = "detailed", joints: str =
     if parts not in ("beam", "solid"):
         raise ValueError(f"parts = {parts!r}; expected beam or solid")
     state = state if state is not None else solve_legs(device, poses)
-    if model == "detailed" and any(leg.hertz_point for leg in device.legs) and hertz_stiffness is None:
+    if model == "detailed" and any(leg.hertz_point or leg.measured_ladder for leg in device.legs) and hertz_stiffness is None:
         raise ValueError("hertz_stiffness: required for the detailed model (the Hertz contacts' linearization)")
     out = np.empty((state.n, 6, 6))
     for p in range(state.n):  # one FE model per pose (each pose is a different mesh)

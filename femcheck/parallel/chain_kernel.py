@@ -39,6 +39,7 @@ TOL = 1e-11
 MAX_STEP = 0.3
 _FP_TOL = 1e-12
 _FP_MAX_ITER = 200
+_LADDER_TOL = 1e-10
 
 
 # ---------------------------------------------------------------- small dense algebra (explicit loops, size m)
@@ -649,6 +650,58 @@ def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
             Ae[b, a] = v
 
 
+@njit(cache=True, error_model="numpy")
+def _ladder_c(F, n, Fs, ds):
+    """Axial tangent compliance d delta / dF of a force ladder (Fs, ds)[:n] at F, floored at Fs[0]
+    (chain_model.ladder_compliance: piecewise power law, end segments continued)."""
+    x = np.log(max(F, Fs[0]))
+    k = 0
+    for i in range(1, n - 1):
+        if np.log(Fs[i]) < x:
+            k = i
+    lf = np.log(Fs[k])
+    pk = (np.log(ds[k + 1]) - np.log(ds[k])) / (np.log(Fs[k + 1]) - lf)
+    return pk * np.exp(np.log(ds[k]) + pk * (x - lf)) / np.exp(x)
+
+
+@njit(cache=True, error_model="numpy")
+def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, scale, Ae, V):
+    """Ae (m, m) = N^T S_e N of leg l's FE-measured joint laws, the constant ones (``which`` 0) or those with a force
+    ladder (1: S_zz replaced by the current axial compliance cl[j], its row and column scaled by sqrt(cl / S_zz)):
+    N's wrenches carried to each joint centre J (r = C - J) and into its link frame R, then the measured 6 x 6
+    compliance; times the element scale."""
+    for a in range(m):
+        for b in range(m):
+            Ae[a, b] = 0.0
+    f = scale[p, l, ml_i[l, 0, 2]]
+    for j in range(ml_i.shape[1]):
+        if ml_i[l, j, 0] < 0 or (ml_n[l, j] > 0) != (which == 1):
+            continue
+        dz = np.sqrt(cl[j] / ml_S[l, j, 2, 2]) if which == 1 else 1.0
+        R = lR[l, p, ml_i[l, j, 1]]
+        c = ml_i[l, j, 0]
+        r0 = C[l, p, 0] - cen[l, p, c, 0]
+        r1 = C[l, p, 1] - cen[l, p, c, 1]
+        r2 = C[l, p, 2] - cen[l, p, c, 2]
+        for a in range(m):
+            f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
+            m0 = Nb[3, a] + r1 * f2 - r2 * f1
+            m1 = Nb[4, a] + r2 * f0 - r0 * f2
+            m2 = Nb[5, a] + r0 * f1 - r1 * f0
+            for k in range(3):
+                V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
+                V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+        for a in range(m):
+            for b in range(a, m):
+                acc = 0.0
+                for i in range(6):
+                    for k in range(6):
+                        acc += V[a, i] * ml_S[l, j, i, k] * V[b, k] * (dz if i == 2 else 1.0) * (dz if k == 2 else 1.0)
+                Ae[a, b] += f * acc
+                if b != a:
+                    Ae[b, a] += f * acc
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _sym_add(K, E, M, m, sign, xv):
     """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
@@ -670,7 +723,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """Evaluate n poses. State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
     scale (n, L, E). Outputs K, S (n, 6, 6), t (n, 6), leg stiffness (n, L, 6, 6), leg wrench (n, L, 6),
-    element energy (n, L, E), Hertz point stiffness (n, L, nhp), iterations (n,). Returns 0; 1 + p if the
+    element energy (n, L, E), Hertz point stiffness (n, L, nhp + nml: then the axial tangent stiffness of the
+    measured laws with a force ladder, mode 3 legs), iterations (n,). Returns 0; 1 + p if the
     fixed point of pose p did not converge; -1 - p if a leg or platform matrix of pose p is not positive definite.
 
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
@@ -681,7 +735,10 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     L = i_n.shape[0]
     n = tcp.shape[0]
     nl = lk_i.shape[1]
-    n_slot = nl + 2
+    n_slot = nl + 4
+    ml_i, ml_S, ml_n, ml_F, ml_d = tab[-1]   # FE-measured joint laws (kernel_tables._measured_law_tables)
+    cl = np.zeros((L, ml_i.shape[1]))     # current axial compliance of the ladder laws
+    lad_slot = np.full(L, -1, np.int64)   # slot of a leg's ladder laws (mode 3: refactored every iteration)
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
     Ae = np.zeros((L, n_slot, 6, 6))
     slot_kind = np.full((L, n_slot), -1, np.int64)
@@ -730,6 +787,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             for j in range(6):
                 K0[i, j] = 0.0
         any_hp = False
+        any_lad = False
         for l in range(L):
             # ---- wrench basis N (6, m)
             if not released:
@@ -795,6 +853,21 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                                     Ae[l, ns, a, b] += ck * xi[a] * xi[b]
                     slot_kind[l, ns] = k_hl
                     ns += 1
+                if ml_i[l, 0, 0] >= 0:
+                    _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl[l], 0, C, cen, lR, Nb[l], scale, Ae[l, ns], V)
+                    slot_kind[l, ns] = ml_i[l, 0, 2]
+                    ns += 1
+                    lad_slot[l] = -1
+                    for j in range(ml_i.shape[1]):
+                        if ml_n[l, j] > 0:   # a force ladder: start at its floor, as the Hertz point contacts
+                            cl[l, j] = _ladder_c(0.0, ml_n[l, j], ml_F[l, j], ml_d[l, j])
+                            lad_slot[l] = ns
+                    if lad_slot[l] >= 0:
+                        _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl[l], 1, C, cen, lR, Nb[l], scale, Ae[l, ns], V)
+                        slot_kind[l, ns] = ml_i[l, 0, 2]
+                        ns += 1
+            else:
+                lad_slot[l] = -1
             n_slots[l] = ns
             for a in range(m):
                 for b in range(m):
@@ -818,6 +891,11 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 c_hp[l] += scale[p, l, k_hp] / kh[l, j]
             if nhp > 0:
                 any_hp = True
+            if lad_slot[l] >= 0:   # mode 3: the leg is refactored at every fixed-point iteration
+                mode[l] = 3
+                any_hp = True
+                any_lad = True
+                continue
             if nhp > 0 and m == 1:
                 mode[l] = 1
                 a1[l] = A0[0, 0]
@@ -879,6 +957,20 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     for i in range(6):
                         for j in range(i, 6):
                             K[i, j] -= HY[i, 0] * H[l, j, 0] + HY[i, 1] * H[l, j, 1] + HY[i, 2] * H[l, j, 2]
+                elif mode[l] == 3:
+                    m = mm[l]
+                    _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl[l], 1, C, cen, lR, Nb[l], scale,
+                                       Ae[l, lad_slot[l]], V)
+                    for a in range(m):
+                        for b in range(m):
+                            acc = c_hp[l] * (Nb[l, 0, a] * Nb[l, 0, b] + Nb[l, 1, a] * Nb[l, 1, b] + Nb[l, 2, a] * Nb[l, 2, b])
+                            for s in range(n_slots[l]):
+                                acc += Ae[l, s, a, b]
+                            A0[a, b] = acc
+                    if not _chol(A0, Lf, m):
+                        return -1 - p
+                    _chol_inverse(Lf, Mi[l], ev, xv, m)
+                    _sym_add(K, E[l], Mi[l], m, 1.0, xv)
             for i in range(6):
                 for j in range(i + 1, 6):
                     K[j, i] = K[i, j]
@@ -889,6 +981,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 break
             # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
             change = 0.0
+            change_l = 0.0   # the ladder laws' axial compliance (chain_model._LADDER_TOL)
             for l in range(L):
                 if mode[l] == 0:
                     continue
@@ -897,6 +990,29 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     for i in range(6):
                         acc += E[l, i, 0] * t[i]
                     F = abs(k1[l] * acc) * np.sqrt(b1[l])
+                elif mode[l] == 3:
+                    m = mm[l]
+                    for a in range(m):
+                        acc = 0.0
+                        for i in range(6):
+                            acc += E[l, i, a] * t[i]
+                        z[a] = acc
+                    for k in range(3):
+                        acc = 0.0
+                        for a in range(m):
+                            for b in range(m):
+                                acc += Nb[l, k, a] * Mi[l, a, b] * z[b]
+                        Ht[k] = acc   # the leg's force W_C[:3]
+                    F = np.sqrt(Ht[0] * Ht[0] + Ht[1] * Ht[1] + Ht[2] * Ht[2])
+                    for j in range(ml_i.shape[1]):
+                        if ml_n[l, j] > 0:   # the joint's axial force: along its link's z axis
+                            R = lR[l, p, ml_i[l, j, 1]]
+                            Fa = abs(R[0, 2] * Ht[0] + R[1, 2] * Ht[1] + R[2, 2] * Ht[2])
+                            c_new = _ladder_c(Fa, ml_n[l, j], ml_F[l, j], ml_d[l, j])
+                            d = abs(c_new - cl[l, j]) / c_new
+                            if d > change_l:
+                                change_l = d
+                            cl[l, j] = c_new
                 else:
                     for k in range(3):
                         Ht[k] = H[l, 0, k] * t[0] + H[l, 1, k] * t[1] + H[l, 2, k] * t[2] + H[l, 3, k] * t[3] \
@@ -917,7 +1033,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     kh[l, j] = k_new
                     c_hp[l] += scale[p, l, k_hp] / k_new
             it += 1
-            if change < _FP_TOL:
+            if change_l < _LADDER_TOL and change < (_LADDER_TOL if any_lad else _FP_TOL):
                 break
             if it >= _FP_MAX_ITER:
                 return 1 + p
@@ -932,6 +1048,9 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             m = mm[l]
             for j in range(i_n[l, 4] if detailed else 0):
                 kh_out[p, l, j] = kh[l, j]
+            for j in range(ml_i.shape[1]):
+                if detailed and ml_n[l, j] > 0:   # after the Hertz point stiffnesses
+                    kh_out[p, l, hp.shape[1] + j] = 1.0 / cl[l, j]
             # y = A_c^-1 E^T t (W_C = N y) and A_c^-1 (the leg stiffness N A_c^-1 N^T)
             for a in range(m):
                 acc = 0.0

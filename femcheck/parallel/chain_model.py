@@ -9,7 +9,12 @@ carried to C_i (frame U) and the elements of a leg add in series, as in the 6-PS
   (a spring along the P axis, or about the R axis);
 - joint contact laws (detailed level): Hertz point contact of an S joint (translational ``I3 / k(F)``,
   linearized at the force of its own leg under the wrench, fixed point) and Hertz line contact + pin
-  bending of an R or U joint (translational, in the frame of the adjacent link).
+  bending of an R or U joint (translational, in the frame of the adjacent link);
+- an FE-measured joint law (detailed level): the joint contact FE's 6 x 6 compliance at the joint centre J in the
+  frame of the adjacent link, carried to C_i as a link is, ``Jf(C - J)^T Rot S_J Rot^T Jf(C - J)``; under
+  ``released`` the leg's wrenches have no moment about the joint's free axes, so those rotation entries drop out;
+  with a force ladder its axial entry is the tangent of the measured approach law at the joint's own axial force
+  (:func:`ladder_compliance`, the same fixed point as the Hertz point contacts).
 
 Joint idealizations: ``rigid`` (passive joints carry moments and forces: the leg is a welded chain,
 ``K_i = S_i^-1``) and ``released`` (passive freedoms free: the leg carries only wrenches reciprocal to them,
@@ -32,6 +37,10 @@ MODELS = ("simplified", "detailed")
 JOINT_IDEALIZATIONS = ("rigid", "released")
 _FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX_ITER = 200
+#: a device with ladder laws: rounding of the joint forces in a rigid leg with a contact-FE 6 x 6 (stick
+#: compliances up to 1e2 rad/(N m) next to 1e-6 m/N) keeps the fixed point at a few 1e-12, so such a device
+#: converges to 1e-10 relative (its Hertz contacts too); devices without ladders keep _FIXED_POINT_TOL
+_LADDER_TOL = 1e-10
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,7 +50,8 @@ class ParallelResult:
     K, S (n, 6, 6): TCP stiffness and compliance; twist (n, 6) under ``wrench`` (n, 6); leg_stiffness
     (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
     W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
-    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts.
+    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts and the
+    axial tangent stiffness of the measured laws with a force ladder.
     """
 
     model: str
@@ -66,9 +76,40 @@ class ParallelResult:
         return directional_stiffness(self.S, direction)
 
 
+def ladder_compliance(F, loads_N, approach_m) -> np.ndarray:
+    """Axial tangent compliance d delta / dF (m/N) of a measured force ladder at forces F (N, any shape).
+
+    delta(F) is the piecewise power law through the ladder, delta = delta_k (F / F_k)^p_k with
+    p_k = ln(delta_k+1 / delta_k) / ln(F_k+1 / F_k), continued beyond its ends
+    (:meth:`femcheck.fe_device.joint_laws.MeasuredJointLaw.approach`), so d delta / dF = p_k delta(F) / F: exact for
+    a Hertz contact (p = 2/3: the ``hertz_point`` tangent). F is floored at the ladder's first force (the contact
+    stays closed, as ``min_contact_force_N``)."""
+    lF, ld = np.log(np.asarray(loads_N, float)), np.log(np.asarray(approach_m, float))
+    p = np.diff(ld) / np.diff(lF)
+    x = np.log(np.maximum(np.asarray(F, float), loads_N[0]))
+    k = np.clip(np.searchsorted(lF, x) - 1, 0, p.size - 1)
+    return p[k] * np.exp(ld[k] + p[k] * (x - lF[k])) / np.exp(x)
+
+
+def _measured_law_at_C(leg, s, joint, c_axial=None) -> np.ndarray:
+    """(n, 6, 6) compliance of ``leg``'s measured law at ``joint`` carried to C (frame U); ``c_axial`` (n,): the
+    axial entry of a ladder law, its row and column scaled by sqrt(c_axial / S_zz) (a congruence: stays definite)."""
+    S_J, c, m = leg.measured_law[joint]
+    n = s.C.shape[0]
+    S = np.broadcast_to(S_J, (n, 6, 6))
+    if c_axial is not None:
+        d = np.ones((n, 6))
+        d[:, 2] = np.sqrt(c_axial / S_J[2, 2])
+        S = S * d[:, :, None] * d[:, None, :]
+    Q = rot6(s.link_R[:, m])
+    to_C = twist_shift(s.C - s.centres[:, c])
+    return to_C @ Q @ S @ np.swapaxes(Q, -1, -2) @ np.swapaxes(to_C, -1, -2)
+
+
 def leg_element_compliances(device, state: DeviceState, model: str = "detailed") -> list[dict[str, np.ndarray]]:
-    """Per leg: {element name: (n, 6, 6) compliance carried to C_i, frame U}, without the Hertz point terms
-    (load-dependent, added by :func:`evaluate`). Links of the same name in one leg add up."""
+    """Per leg: {element name: (n, 6, 6) compliance carried to C_i, frame U}, without the Hertz point terms and the
+    measured laws with a force ladder (load-dependent, added by :func:`evaluate`). Links of the same name in one
+    leg add up."""
     out = []
     for i, leg in enumerate(device.legs):
         s = state.legs[i]
@@ -91,6 +132,12 @@ def leg_element_compliances(device, state: DeviceState, model: str = "detailed")
                     R = s.link_R[:, m]
                     S[:, :3, :3] += np.einsum("nij,j,nkj->nik", R, np.array([c_uc, c_uc, c_uc + c_ub]), R)
                 parts["hertz_line"] = S
+            if leg.measured_law:
+                S = np.zeros((n, 6, 6))
+                for j in leg.measured_law:
+                    if j not in leg.measured_ladder:
+                        S += _measured_law_at_C(leg, s, j)
+                parts["measured_law"] = S
         out.append(parts)
     return out
 
@@ -151,24 +198,37 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     S_fixed = [sum(p.values()) if p else np.zeros((n, 6, 6)) for p in parts]
     hertz = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.hertz_point.items()} if model == "detailed" else {}
     k_h = {key: hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
+    ladder = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.measured_ladder.items()} if model == "detailed" else {}
+    c_lad = {key: ladder_compliance(np.zeros(n), *v) for key, v in ladder.items()}   # start at the ladder's floor
+
+    def ladder_parts(i):
+        return [(j, _measured_law_at_C(device.legs[i], state.legs[i], j, c_lad[i, j])
+                 * scale[:, i, names.index("measured_law"), None, None]) for (li, j) in c_lad if li == i]
+
     history = []
     for it in range(_FIXED_POINT_MAX_ITER):
         S_leg = [S_fixed[i] + sum(_translational(scale[:, i, names.index("hertz_point")] / k_h[key])
-                                  for key in k_h if key[0] == i) for i in range(L)]
+                                  for key in k_h if key[0] == i)
+                 + sum(S for _, S in ladder_parts(i)) for i in range(L)]
         K_leg = [_leg_stiffness(S_leg[i], N[i]) for i in range(L)]
         K_T = sum(np.swapaxes(G[i], -1, -2) @ K_leg[i] @ G[i] for i in range(L))
         K_T = 0.5 * (K_T + np.swapaxes(K_T, -1, -2))
         t = np.linalg.solve(K_T, W[..., None])[..., 0]
         W_C = np.stack([np.einsum("nij,njk,nk->ni", K_leg[i], G[i], t) for i in range(L)], axis=1)
-        if not hertz:
+        if not hertz and not ladder:
             break
-        change = 0.0
+        change, change_lad = 0.0, 0.0
+        for (i, j), v in ladder.items():   # the joint's axial force: along its frame's z axis (the link)
+            z = state.legs[i].link_R[:, device.legs[i].measured_law[j][2], :, 2]
+            c_new = ladder_compliance(np.abs(np.einsum("ni,ni->n", z, W_C[:, i, :3])), *v)
+            change_lad = max(change_lad, float(np.max(np.abs(c_new - c_lad[i, j]) / c_new)))
+            c_lad[i, j] = c_new
         for (i, j), (E, R, F_min) in hertz.items():
             k_new = hertz_tangent_stiffness(np.maximum(np.linalg.norm(W_C[:, i, :3], axis=1), F_min), E, R)
             change = max(change, float(np.max(np.abs(k_new - k_h[i, j]) / k_new)))
             k_h[i, j] = k_new
-        history.append(change)
-        if change < _FIXED_POINT_TOL:
+        history.append(max(change, change_lad))
+        if change_lad < _LADDER_TOL and change < (_LADDER_TOL if ladder else _FIXED_POINT_TOL):
             break
     else:
         raise ConvergenceError("Hertz linearization fixed point of the parallel device did not converge", history)
@@ -180,6 +240,9 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
             if li == i:
                 energy[:, i, names.index("hertz_point")] += (np.sum(W_C[:, i, :3] ** 2, axis=1)
                                                              * scale[:, i, names.index("hertz_point")] / k_h[li, j])
+        for _, S_e in ladder_parts(i):
+            energy[:, i, names.index("measured_law")] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
+    k_h = {**k_h, **{key: 1.0 / c for key, c in c_lad.items()}}
     return _result(model, joints, state, W, K_T, np.linalg.inv(K_T), t, np.stack(K_leg, axis=1), W_C, names, energy,
                    k_h, len(history) + 1)
 

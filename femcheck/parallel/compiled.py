@@ -92,7 +92,7 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
     KL = np.empty((n, L, 6, 6))
     WC = np.empty((n, L, 6))
     energy = np.empty((n, L, tb.n_elem))
-    kh = np.full((n, L, tb.hp_joint.shape[1]), np.nan)
+    kh = np.full((n, L, tb.hp_joint.shape[1] + tb.ml_joint.shape[1]), np.nan)   # Hertz points, then ladder laws
     iters = np.zeros(n, dtype=np.int64)
     status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
                                lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
@@ -108,4 +108,7 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
             for j, joint in enumerate(tb.hp_joint[l]):
                 if joint >= 0:
                     hertz[l, int(joint)] = kh[:, l, j]
+            for j, joint in enumerate(tb.ml_joint[l]):   # measured laws with a force ladder: axial tangent
+                if joint >= 0 and not np.isnan(kh[0, l, tb.hp_joint.shape[1] + j]):
+                    hertz[l, int(joint)] = kh[:, l, tb.hp_joint.shape[1] + j]
     return K, S, t, KL, WC, energy, hertz, int(iters.max(initial=1))

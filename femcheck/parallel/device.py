@@ -55,6 +55,9 @@ class Leg:
     actuated_dof: index of the driven freedom; joint_centre (nj,) index into centres (-1 for P);
     links: the members; b_platform (3,): the last centre in the platform frame.
     limits: ((dof, low, high), ...) joint ranges; drive_compliance: m/N or rad/(N m); hertz_point: {joint: (E*, R*, F_min)}; hertz_line: {joint: (c_uc, c_ub, link)}.
+    measured_law: {joint: (S (6, 6), centre, link)}: a contact-FE compliance (SI) at the joint centre ``centres[centre]``
+    in the frame of link ``link`` (z along the link); measured_ladder: {joint: (loads_N (k,), approach_m (k,))} of
+    the laws whose axial entry follows a force ladder (:func:`femcheck.parallel.chain_model.ladder_compliance`).
     """
 
     name: str
@@ -74,6 +77,8 @@ class Leg:
     hertz_point: dict
     hertz_line: dict
     limits: tuple = ()
+    measured_law: dict = dataclasses.field(default_factory=dict)
+    measured_ladder: dict = dataclasses.field(default_factory=dict)
 
     @property
     def n_dof(self) -> int:
@@ -107,7 +112,8 @@ class ParallelDevice:
 
     @property
     def element_names(self) -> tuple[str, ...]:
-        """Names of the element kinds, in order of first appearance: link names, ``drive``, ``hertz_point``, ``hertz_line``."""
+        """Names of the element kinds, in order of first appearance: link names, ``drive``, ``hertz_point``, ``hertz_line``,
+        ``measured_law``."""
         names = []
         for leg in self.legs:
             for ln in leg.links:
@@ -118,6 +124,8 @@ class ParallelDevice:
             names.append("hertz_point")
         if any(leg.hertz_line for leg in self.legs):
             names.append("hertz_line")
+        if any(leg.measured_law for leg in self.legs):
+            names.append("measured_law")
         return tuple(names)
 
     def rotated(self, Q) -> "ParallelDevice":
@@ -225,13 +233,22 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
             k_uc = line_contact_stiffness(h.contact_length_m, E_star)
             k_ub = pin_bending_stiffness(h.pin_material.E_Pa, h.pin_radius_m, h.pin_span_m)
             hl[k] = (float(1.0 / k_uc), float(1.0 / k_ub), link_of(k))
+    ml, mlad = {}, {}
+    for k, j in enumerate(spec.joints):
+        if j.measured_law is not None:
+            c = int(joint_centre[k])
+            link = {"link_before": c - 1, "link_after": c, None: link_of(k)}[j.measured_law.frame]
+            ml[k] = (np.array(j.measured_law.compliance, dtype=float), c, link)
+            if j.measured_law.loads_N is not None:
+                mlad[k] = (np.array(j.measured_law.loads_N, float), np.array(j.measured_law.approach_m, float))
     b = R_home.T @ (centres[-1] - p_home)
     name = spec.name if copies == 1 else f"{spec.name}{copy + 1}"
     return Leg(name=name, case_index=i, copy=copy, joint_types=tuple(j.type for j in spec.joints), centres=centres,
                dof_kind=tuple(kinds), dof_axis=np.array(axes), dof_point=np.array(points), dof_joint=np.array(owner),
                actuated_dof=actuated, joint_centre=joint_centre, links=tuple(links), b_platform=b,
                drive_compliance=spec.joints[act_joint].drive.compliance, hertz_point=hp, hertz_line=hl,
-               limits=tuple((owner.index(k), *j.limits) for k, j in enumerate(spec.joints) if j.limits is not None))
+               limits=tuple((owner.index(k), *j.limits) for k, j in enumerate(spec.joints) if j.limits is not None),
+               measured_law=ml, measured_ladder=mlad)
 
 
 def device_from_case(case, check_points: bool = False) -> ParallelDevice:

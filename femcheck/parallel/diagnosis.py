@@ -142,7 +142,8 @@ def diagnose(case, data, *, model: str = "detailed", joints: str | None = None,
     L, E = dev.n_legs, len(names)
     state = solve_legs(dev, rd.poses)
     # kinds the model level does not contain (the drive and joints in the simplified model) have nothing to fit
-    present = [j for j, n in enumerate(names) if model == "detailed" or n not in ("drive", "hertz_point", "hertz_line")]
+    present = [j for j, n in enumerate(names) if model == "detailed" or n not in ("drive", "hertz_point", "hertz_line",
+                                                                                        "measured_law")]
 
     def by_kind(theta):
         s = np.ones((L, E))

@@ -27,7 +27,8 @@ class DeviceTables:
 
     ``tab``: the tuple handed to the kernels; ``released_ok``: every leg's passive twists are independent at
     the home pose (the kernels' Householder null space needs it; otherwise released joints use numpy);
-    ``hp_joint`` (L, nhp): joint index of each Hertz point contact (-1 padding).
+    ``hp_joint`` (L, nhp): joint index of each Hertz point contact (-1 padding); ``ml_joint`` (L, nml): of each
+    measured joint law (its axial tangent, for a force ladder, follows the Hertz stiffnesses in the kernel's output).
     """
 
     tab: tuple
@@ -35,6 +36,8 @@ class DeviceTables:
     released_ok: bool
     hp_joint: np.ndarray
     ik_kind: np.ndarray
+    #: (L, nml) joint index of each measured law (-1 padding)
+    ml_joint: np.ndarray | None = None
 
 
 _CACHE: dict[int, DeviceTables] = {}
@@ -138,9 +141,39 @@ def _build(device) -> DeviceTables:
         if tw.size and np.linalg.matrix_rank(tw, tol=1e-9 * np.abs(tw).max()) < len(tw):
             released_ok = False
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
+    ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint = _measured_law_tables(device)
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home)
-    return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik)
+           f_leg, b_plat, kinds, R_home, (ml_i, ml_S, ml_n, ml_F, ml_d))   # measured laws: keep them last (tab[-1])
+    return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik,
+                        ml_joint=ml_joint)
+
+
+def _measured_law_tables(device):
+    """FE-measured joint laws: ml_i (L, nml, 3) centre, link, element kind (-1 padding); ml_S (L, nml, 6, 6) the
+    compliance at the joint centre in the link frame (``Leg.measured_law``); ml_n (L, nml) force-ladder length (0: a
+    constant law), ml_F, ml_d (L, nml, k) its forces and approaches (``Leg.measured_ladder``); ml_joint (L, nml)."""
+    legs = device.legs
+    nml = max(max(len(leg.measured_law) for leg in legs), 1)
+    nk = max([len(F) for leg in legs for F, _ in leg.measured_ladder.values()] + [1])
+    ml_i = np.full((len(legs), nml, 3), -1, np.int64)
+    ml_S = np.zeros((len(legs), nml, 6, 6))
+    ml_n = np.zeros((len(legs), nml), np.int64)
+    ml_F = np.ones((len(legs), nml, nk))
+    ml_d = np.ones((len(legs), nml, nk))
+    ml_joint = np.full((len(legs), nml), -1, np.int64)
+    if any(leg.measured_law for leg in legs):
+        kind = device.element_names.index("measured_law")
+        for l, leg in enumerate(legs):
+            for j, (k, (S, c, m)) in enumerate(leg.measured_law.items()):
+                ml_i[l, j] = c, m, kind
+                ml_S[l, j] = S
+                ml_joint[l, j] = k
+                if k in leg.measured_ladder:
+                    F, d = leg.measured_ladder[k]
+                    ml_n[l, j] = len(F)
+                    ml_F[l, j, :len(F)] = F
+                    ml_d[l, j, :len(F)] = d
+    return ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint
 
 
 def _rotvec_matrix(v):
