@@ -190,8 +190,9 @@ def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw):
 
 # ---------------------------------------------------------------- closed forms
 @njit(cache=True, error_model="numpy")
-def _sp1(w, p, z, cs, k):
-    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2])."""
+def _sp1(w, p, z, cs, k, angle):
+    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2]);
+    the angle itself (an arctan2) only if ``angle``, else 0."""
     wp = w[0] * p[0] + w[1] * p[1] + w[2] * p[2]
     wz = w[0] * z[0] + w[1] * z[1] + w[2] * z[2]
     p0, p1, p2 = p[0] - w[0] * wp, p[1] - w[1] * wp, p[2] - w[2] * wp
@@ -203,14 +204,14 @@ def _sp1(w, p, z, cs, k):
         cs[k], cs[k + 1] = x / r, y / r
     else:
         cs[k], cs[k + 1] = 1.0, 0.0
-    return np.arctan2(y, x)
+    return np.arctan2(y, x) if angle else 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def _sp2(w1, w2, p, qv, z, out):
+def _sp2(w1, w2, p, qv, z, out, angles):
     """Paden-Kahan subproblem 2: Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point), the solution whose
-    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2);
-    False if none is real."""
+    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2)
+    (t1, t2 only if ``angles``); False if none is real."""
     c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
     den = 1.0 - c12 * c12
     if den < 1e-12:
@@ -239,8 +240,8 @@ def _sp2(w1, w2, p, qv, z, out):
             best = d
             for i in range(3):
                 z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-    out[1] = _sp1(w2, p, z, out, 4)
-    out[0] = _sp1(w1, z, qv, out, 2)
+    out[1] = _sp1(w2, p, z, out, 4, angles)
+    out[0] = _sp1(w1, z, qv, out, 2, angles)
     return True
 
 
@@ -309,9 +310,14 @@ def _s_axes(R, A, T, q1, out):
 
 
 @njit(cache=True, error_model="numpy", inline="always")  # inlined: ~20 array arguments per call otherwise
-def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
+def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3,
+                 full, want_q):
     """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
-    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
+    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution.
+
+    ``full``: every joint value and twist (the state of :func:`ik_kernel`). Otherwise (the fused
+    :func:`evaluate_kernel`) only what the chain model reads: the actuated joint's value and twist, the
+    transforms and C; the passive joint angles (arctan2, arcsin) only if ``want_q`` (a joint limit on them)."""
     kind = i_n[l, 7]
     for i in range(3):
         for j in range(3):
@@ -337,14 +343,15 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         for i in range(3):
             v3[i] = Rn[0, i] * w3[0] + Rn[1, i] * w3[1] + Rn[2, i] * w3[2]   # R_nd^T d
         # Rot(a2, t1) Rot(a1, t2) d_home = R_nd^T d  with t1 = -q5, t2 = -q4
-        if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang):
+        if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang, want_q):
             return False
         q[5], q[4] = -ang[0], -ang[1]
         _rodrigues_cs(daxis[l, 5], ang[2], ang[3], Ra)
         _rodrigues_cs(daxis[l, 4], ang[4], ang[5], Rb)
         _mm3(Rn, Ra, T3)
         _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
-        _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
+        if want_q:
+            _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
         for i in range(3):
             v3[i] = cS[i] + u[i] * q[0]                          # B
         _set_transform(Rp, tp, 0, I3, cS, cS)
@@ -354,11 +361,12 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
             C[i] = Rs[i, 0] * z3[0] + Rs[i, 1] * z3[1] + Rs[i, 2] * z3[2] + v3[i]
         _set_transform(Rp, tp, 6, Rn, cU, C)
         _set_twist(tw, 0, I3, u, C, C, False)
-        _s_axes(I3, A3, T3, q[1], Sx)
-        for k in range(3):
-            _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
-        _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
-        _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
+        if full:
+            _s_axes(I3, A3, T3, q[1], Sx)
+            for k in range(3):
+                _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
+            _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
+            _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
         return True
     # U-P*-S: dofs [U1, U2, P, S1, S2, S3]
     u = daxis[l, 2]
@@ -377,7 +385,7 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         w3[i] /= Lw
         sg += u[i] * z3[i]
     q[2] = (Lw - L0) / sg
-    if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang):
+    if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang, want_q):
         return False
     q[0], q[1] = ang[0], ang[1]
     _rodrigues_cs(daxis[l, 0], ang[2], ang[3], Ra)
@@ -386,7 +394,8 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
     for i in range(3):
         for j in range(3):
             Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_S = R_U^T R_nd
-    _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
+    if want_q:
+        _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
     for i in range(3):
         for j in range(3):
             Rb[i, j] = Sx[i, j]                                  # keep R_U
@@ -402,12 +411,13 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         w3[i] = cU[i] - u[i] * q[2]
     _set_transform(Rp, tp, 3, Rb, w3, cU)                        # after the slide: R_U (x + u q - c_U) + c_U
     _set_transform(Rp, tp, 6, Rn, cS, C)
-    _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
-    _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
     _set_twist(tw, 2, Rb, u, C, C, False)
-    _s_axes(Rb, A3, T3, q[3], Sx)
-    for k in range(3):
-        _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
+    if full:
+        _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
+        _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
+        _s_axes(Rb, A3, T3, q[3], Sx)
+        for k in range(3):
+            _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
     return True
 
 
@@ -421,10 +431,18 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
     C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
     """
+    _ik_range(tab, R_t, C_t, numeric_only, True, 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
+              tw_out, lR_out, len_out)
+
+
+@njit(cache=True, error_model="numpy")
+def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out, closed_out, C_out, cen_out, tw_out,
+              lR_out, len_out):
+    """:func:`ik_kernel` on the poses p0 <= p < p1, written at index p - p0 of the outputs. ``full``: the whole
+    state; otherwise a closed-form leg writes only what the chain model reads (:func:`_closed_form`)."""
     i_n, dkind, daxis, dpoint, cen, cen_first, lk_i, lk_x, lim_d, lim, f_leg, R_home = (
         tab[0], tab[1], tab[2], tab[3], tab[5], tab[6], tab[7], tab[8], tab[13], tab[14], tab[15], tab[18])
     L = i_n.shape[0]
-    n = R_t.shape[0]
     ndm = q_out.shape[2]
     Rp = np.zeros((ndm + 1, 3, 3))
     tp = np.zeros((ndm + 1, 3))
@@ -445,13 +463,15 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
     for l in range(L):
         nd = i_n[l, 0]
-        for p in range(n):
+        want_q = full or i_n[l, 8] > 0
+        for p in range(p0, p1):
+            jp = p - p0
             for k in range(ndm):
                 q[k] = 0.0
             closed = False
             if i_n[l, 7] > 0 and not numeric_only:
                 closed = _closed_form(l, i_n, daxis, cen, f_leg, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
-                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
+                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3, full, want_q)
                 if closed:
                     # the orientation holds by construction (R_nd is the product); check the position
                     res = np.sqrt((C_t[l, p, 0] - C[0]) ** 2 + (C_t[l, p, 1] - C[1]) ** 2 + (C_t[l, p, 2] - C[2]) ** 2)
@@ -517,38 +537,38 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
                 res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
             # ---- outputs of the converged configuration
-            closed_out[l, p] = closed
-            res_out[l, p] = res
+            closed_out[l, jp] = closed
+            res_out[l, jp] = res
             ok = res < TOL
             for j in range(i_n[l, 5]):
                 v = q[lim_d[l, j]]
                 if not (v >= lim[l, j, 0] and v <= lim[l, j, 1]):
                     ok = False
-            ok_out[l, p] = ok
+            ok_out[l, jp] = ok
             for k in range(ndm):
-                q_out[l, p, k] = q[k]
+                q_out[l, jp, k] = q[k]
             for i in range(3):
-                C_out[l, p, i] = C[i]
+                C_out[l, jp, i] = C[i]
             if not closed:
                 _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
             for k in range(nd):
                 for i in range(6):
-                    tw_out[l, p, k, i] = tw[k, i]
+                    tw_out[l, jp, k, i] = tw[k, i]
             nc = i_n[l, 1]
             for m in range(nc - 1):
                 f0 = cen_first[l, m]
                 c0 = cen[l, m]
                 for i in range(3):
-                    cen_out[l, p, m, i] = Rp[f0, i, 0] * c0[0] + Rp[f0, i, 1] * c0[1] + Rp[f0, i, 2] * c0[2] + tp[f0, i]
+                    cen_out[l, jp, m, i] = Rp[f0, i, 0] * c0[0] + Rp[f0, i, 1] * c0[1] + Rp[f0, i, 2] * c0[2] + tp[f0, i]
             for i in range(3):
-                cen_out[l, p, nc - 1, i] = C[i]
+                cen_out[l, jp, nc - 1, i] = C[i]
             for m in range(i_n[l, 2]):
                 s, en, body = lk_i[l, m, 0], lk_i[l, m, 1], lk_i[l, m, 2]
-                d0 = cen_out[l, p, en, 0] - cen_out[l, p, s, 0]
-                d1 = cen_out[l, p, en, 1] - cen_out[l, p, s, 1]
-                d2 = cen_out[l, p, en, 2] - cen_out[l, p, s, 2]
+                d0 = cen_out[l, jp, en, 0] - cen_out[l, jp, s, 0]
+                d1 = cen_out[l, jp, en, 1] - cen_out[l, jp, s, 1]
+                d2 = cen_out[l, jp, en, 2] - cen_out[l, jp, s, 2]
                 ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                len_out[l, p, m] = ln
+                len_out[l, jp, m] = ln
                 z0, z1, z2 = d0 / ln, d1 / ln, d2 / ln
                 xa = lk_x[l, m]
                 x0 = Rp[body, 0, 0] * xa[0] + Rp[body, 0, 1] * xa[1] + Rp[body, 0, 2] * xa[2]
@@ -558,11 +578,11 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
                 xn = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
                 x0, x1, x2 = x0 / xn, x1 / xn, x2 / xn
-                lR_out[l, p, m, 0, 0], lR_out[l, p, m, 1, 0], lR_out[l, p, m, 2, 0] = x0, x1, x2
-                lR_out[l, p, m, 0, 1] = z1 * x2 - z2 * x1
-                lR_out[l, p, m, 1, 1] = z2 * x0 - z0 * x2
-                lR_out[l, p, m, 2, 1] = z0 * x1 - z1 * x0
-                lR_out[l, p, m, 0, 2], lR_out[l, p, m, 1, 2], lR_out[l, p, m, 2, 2] = z0, z1, z2
+                lR_out[l, jp, m, 0, 0], lR_out[l, jp, m, 1, 0], lR_out[l, jp, m, 2, 0] = x0, x1, x2
+                lR_out[l, jp, m, 0, 1] = z1 * x2 - z2 * x1
+                lR_out[l, jp, m, 1, 1] = z2 * x0 - z0 * x2
+                lR_out[l, jp, m, 2, 1] = z0 * x1 - z1 * x0
+                lR_out[l, jp, m, 0, 2], lR_out[l, jp, m, 1, 2], lR_out[l, jp, m, 2, 2] = z0, z1, z2
 
 
 # ---------------------------------------------------------------- the chain model
@@ -676,10 +696,18 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
     ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
     Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
+    return _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, 0, tcp.shape[0],
+                        K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
+
+
+@njit(cache=True, error_model="numpy")
+def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+                 K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
+    """:func:`chain_kernel` on the poses p0 <= p < p1: the state arrays (C, cen, tw, lR, llen) at index p - p0,
+    everything else at p."""
     i_n, passive, lk_i, lk_p, hl_c, hl_link, hp, f_leg, kinds = (tab[0], tab[4], tab[7], tab[9], tab[10], tab[11],
                                                                  tab[12], tab[15], tab[17])
     L = i_n.shape[0]
-    n = tcp.shape[0]
     nl = lk_i.shape[1]
     n_slot = nl + 2
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
@@ -725,7 +753,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     YHt = np.zeros(3)
     HY = np.zeros((6, 3))
     ik_kind = i_n[:, 7]
-    for p in range(n):
+    for p in range(p0, p1):
+        jp = p - p0
         for i in range(6):
             for j in range(6):
                 K0[i, j] = 0.0
@@ -740,15 +769,15 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             elif ik_kind[l] > 0:
                 # F-P-S-U / U-P-S: the one wrench is the force along the line of the S and U centres (through C)
                 o = 1 if ik_kind[l] == 1 else 0
-                d0 = C[l, p, 0] - cen[l, p, o, 0]
-                d1 = C[l, p, 1] - cen[l, p, o, 1]
-                d2 = C[l, p, 2] - cen[l, p, o, 2]
+                d0 = C[l, jp, 0] - cen[l, jp, o, 0]
+                d1 = C[l, jp, 1] - cen[l, jp, o, 1]
+                d2 = C[l, jp, 2] - cen[l, jp, o, 2]
                 dn = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 m = 1
                 Nb[l, 0, 0], Nb[l, 1, 0], Nb[l, 2, 0] = d0 / dn, d1 / dn, d2 / dn
                 Nb[l, 3, 0] = Nb[l, 4, 0] = Nb[l, 5, 0] = 0.0
             else:
-                m = _null_basis(tw[l, p], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
+                m = _null_basis(tw[l, jp], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
             mm[l] = m
             # ---- A_e = N^T S_e N of every element (compliances carried to C_l)
             ns = 0
@@ -758,8 +787,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     continue
                 en = lk_i[l, k, 1]
                 for i in range(3):
-                    r3[i] = C[l, p, i] - cen[l, p, en, i]
-                _link_form(llen[l, p, k], lk_p[l, k], shear, lR[l, p, k], r3, Nb[l], m, Ae[l, ns], V)
+                    r3[i] = C[l, jp, i] - cen[l, jp, en, i]
+                _link_form(llen[l, jp, k], lk_p[l, k], shear, lR[l, jp, k], r3, Nb[l], m, Ae[l, ns], V)
                 f = scale[p, l, kind]
                 for a in range(m):
                     for b in range(m):
@@ -768,7 +797,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 ns += 1
             if detailed:
                 c = f_leg[l, 0] * scale[p, l, k_drive]
-                x = tw[l, p, i_n[l, 6]]
+                x = tw[l, jp, i_n[l, 6]]
                 for a in range(m):
                     acc = 0.0
                     for i in range(6):
@@ -785,7 +814,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                         for b in range(m):
                             Ae[l, ns, a, b] = 0.0
                     for j in range(i_n[l, 3]):
-                        R = lR[l, p, hl_link[l, j]]
+                        R = lR[l, jp, hl_link[l, j]]
                         for k in range(3):
                             ck = f * (hl_c[l, j, 0] + (hl_c[l, j, 1] if k == 2 else 0.0))
                             for a in range(m):
@@ -804,7 +833,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     A0[a, b] = acc
             # ---- E = G^T N (wrenches at the TCP)
             for i in range(3):
-                r3[i] = C[l, p, i] - tcp[p, i]
+                r3[i] = C[l, jp, i] - tcp[p, i]
             for a in range(m):
                 f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
                 E[l, 0, a], E[l, 1, a], E[l, 2, a] = f0, f1, f2
@@ -990,4 +1019,48 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 F2 = WC_out[p, l, 0] ** 2 + WC_out[p, l, 1] ** 2 + WC_out[p, l, 2] ** 2
                 for j in range(i_n[l, 4]):
                     energy_out[p, l, k_hp] += F2 * scale[p, l, k_hp] / kh[l, j]
+    return 0
+
+
+#: poses per block of the fused kernel: the block's leg state (~200 kB for six legs) stays in the cache
+BLOCK = 64
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_kernel(tab, detailed, released, shear, R_t, C_t, tcp, wrench, scale,
+                    K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, bad_out):
+    """Inverse kinematics and chain model of n poses in one call (:func:`_ik_range` then :func:`_chain_range`,
+    block by block of ``BLOCK`` poses): the leg state lives only in a block-sized buffer, and a closed-form leg
+    computes only what the chain model reads (no passive joint angles or twists).
+
+    R_t (n, 3, 3), C_t (L, n, 3) as :func:`ik_kernel`; the rest and the return value as :func:`chain_kernel`.
+    bad_out (2,): the first pose and leg without an inverse-kinematics solution inside the joint limits
+    (-1, -1 if none); the kernel stops there and returns 0."""
+    i_n, cen_t, lk_i = tab[0], tab[5], tab[7]
+    L = i_n.shape[0]
+    n = tcp.shape[0]
+    nd, nc, nl = tab[1].shape[1], cen_t.shape[1], lk_i.shape[1]
+    B = min(BLOCK, max(n, 1))
+    q = np.zeros((L, B, nd))
+    res = np.zeros((L, B))
+    ok = np.zeros((L, B), dtype=np.bool_)
+    closed = np.zeros((L, B), dtype=np.bool_)
+    C = np.zeros((L, B, 3))
+    cen = np.zeros((L, B, nc, 3))
+    tw = np.zeros((L, B, nd, 6))
+    lR = np.zeros((L, B, nl, 3, 3))
+    llen = np.ones((L, B, nl))
+    bad_out[0], bad_out[1] = -1, -1
+    for p0 in range(0, n, B):
+        p1 = min(n, p0 + B)
+        _ik_range(tab, R_t, C_t, False, False, p0, p1, q, res, ok, closed, C, cen, tw, lR, llen)
+        for p in range(p0, p1):
+            for l in range(L):
+                if not ok[l, p - p0]:
+                    bad_out[0], bad_out[1] = p, l
+                    return 0
+        status = _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+                              K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
+        if status != 0:
+            return status
     return 0

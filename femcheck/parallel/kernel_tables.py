@@ -78,7 +78,8 @@ def _build(device) -> DeviceTables:
     nhl = max(max(len(leg.hertz_line) for leg in legs), 1)
     nhp = max(max(len(leg.hertz_point) for leg in legs), 1)
     nlim = max(max(len(leg.limits) for leg in legs), 1)
-    i_n = np.zeros((L, 8), np.int64)     # n_dof, n_centres, n_links, n_hl, n_hp, n_lim, actuated, ik_kind
+    # n_dof, n_centres, n_links, n_hl, n_hp, n_lim, actuated, ik_kind, a limit on a passive freedom
+    i_n = np.zeros((L, 9), np.int64)
     dkind = np.zeros((L, nd), np.int64)  # 0 R, 1 P
     daxis = np.zeros((L, nd, 3))
     dpoint = np.zeros((L, nd, 3))
@@ -104,7 +105,7 @@ def _build(device) -> DeviceTables:
     for l, leg in enumerate(legs):
         ik[l] = _ik_kind(leg)
         i_n[l] = [leg.n_dof, len(leg.centres), len(leg.links), len(leg.hertz_line), len(leg.hertz_point),
-                  len(leg.limits), leg.actuated_dof, ik[l]]
+                  len(leg.limits), leg.actuated_dof, ik[l], any(d != leg.actuated_dof for d, _, _ in leg.limits)]
         for k in range(leg.n_dof):
             dkind[l, k] = 0 if leg.dof_kind[k] == "R" else 1
             passive[l, k] = int(k != leg.actuated_dof)
