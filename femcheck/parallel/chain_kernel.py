@@ -551,9 +551,13 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 C_out[l, jp, i] = C[i]
             if not closed:
                 _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
-            for k in range(nd):
+            if full or not closed:
+                for k in range(nd):
+                    for i in range(6):
+                        tw_out[l, jp, k, i] = tw[k, i]
+            else:                                   # the chain model reads only the actuated twist
                 for i in range(6):
-                    tw_out[l, jp, k, i] = tw[k, i]
+                    tw_out[l, jp, i_n[l, 6], i] = tw[i_n[l, 6], i]
             nc = i_n[l, 1]
             for m in range(nc - 1):
                 f0 = cen_first[l, m]
@@ -1027,20 +1031,54 @@ BLOCK = 64
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_kernel(tab, detailed, released, shear, R_t, C_t, tcp, wrench, scale,
-                    K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, bad_out):
-    """Inverse kinematics and chain model of n poses in one call (:func:`_ik_range` then :func:`_chain_range`,
-    block by block of ``BLOCK`` poses): the leg state lives only in a block-sized buffer, and a closed-form leg
-    computes only what the chain model reads (no passive joint angles or twists).
+def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
+    """Platform orientation R_b[p - p0] (Rodrigues, as ``femcheck.kinematics.frames.rotvec_to_matrix``:
+    ``I + a K + b K^2``, K = skew(rotation vector), a = sin th / th, b = (1 - cos th) / th^2) and leg attachment
+    targets C_b[l, p - p0] = T - R tcp_offset + R b_l of the poses P[p0:p1] (n, 6)."""
+    L = b_plat.shape[0]
+    Kx = np.zeros((3, 3))
+    for p in range(p0, p1):
+        j = p - p0
+        x, y, z = P[p, 3], P[p, 4], P[p, 5]
+        th2 = x * x + y * y + z * z
+        th = np.sqrt(th2)
+        if th < 1e-8:
+            a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+        else:
+            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th ** 2
+        Kx[0, 0], Kx[0, 1], Kx[0, 2] = 0.0, -z, y
+        Kx[1, 0], Kx[1, 1], Kx[1, 2] = z, 0.0, -x
+        Kx[2, 0], Kx[2, 1], Kx[2, 2] = -y, x, 0.0
+        for r in range(3):
+            for c in range(3):
+                kk = Kx[r, 0] * Kx[0, c] + Kx[r, 1] * Kx[1, c] + Kx[r, 2] * Kx[2, c]
+                R_b[j, r, c] = (1.0 if r == c else 0.0) + a * Kx[r, c] + b * kk
+        R = R_b[j]
+        for i in range(3):
+            o = P[p, i] - (R[i, 0] * tcp_off[0] + R[i, 1] * tcp_off[1] + R[i, 2] * tcp_off[2])
+            for l in range(L):
+                C_b[l, j, i] = o + (R[i, 0] * b_plat[l, 0] + R[i, 1] * b_plat[l, 1] + R[i, 2] * b_plat[l, 2])
 
-    R_t (n, 3, 3), C_t (L, n, 3) as :func:`ik_kernel`; the rest and the return value as :func:`chain_kernel`.
-    bad_out (2,): the first pose and leg without an inverse-kinematics solution inside the joint limits
-    (-1, -1 if none); the kernel stops there and returns 0."""
+
+@njit(cache=True, error_model="numpy")
+def evaluate_kernel(tab, detailed, released, shear, P, wrench, scale,
+                    K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, contrib_out, bad_out):
+    """Inverse kinematics and chain model of the n TCP poses P (n, 6) in one call, block by block of ``BLOCK``
+    poses: the targets (:func:`_pose_targets`), the legs (:func:`_ik_range`: a closed-form leg computes only
+    what the chain model reads, no passive joint angles or twists), then :func:`_chain_range`. The leg state
+    lives only in block-sized buffers.
+
+    Outputs as :func:`chain_kernel`, and contributions (n, E): each element kind's share of the work
+    ``W . t`` (NaN where it is not positive). bad_out (2,): the first pose and leg without an inverse-kinematics
+    solution inside the joint limits (-1, -1 if none); the kernel stops there and returns 0."""
     i_n, cen_t, lk_i = tab[0], tab[5], tab[7]
     L = i_n.shape[0]
-    n = tcp.shape[0]
+    n = P.shape[0]
     nd, nc, nl = tab[1].shape[1], cen_t.shape[1], lk_i.shape[1]
+    E = energy_out.shape[2]
     B = min(BLOCK, max(n, 1))
+    R_b = np.zeros((B, 3, 3))
+    C_b = np.zeros((L, B, 3))
     q = np.zeros((L, B, nd))
     res = np.zeros((L, B))
     ok = np.zeros((L, B), dtype=np.bool_)
@@ -1053,14 +1091,27 @@ def evaluate_kernel(tab, detailed, released, shear, R_t, C_t, tcp, wrench, scale
     bad_out[0], bad_out[1] = -1, -1
     for p0 in range(0, n, B):
         p1 = min(n, p0 + B)
-        _ik_range(tab, R_t, C_t, False, False, p0, p1, q, res, ok, closed, C, cen, tw, lR, llen)
+        _pose_targets(P, p0, p1, tab[19], tab[16], R_b, C_b)
+        _ik_range(tab, R_b, C_b, False, False, 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
         for p in range(p0, p1):
             for l in range(L):
                 if not ok[l, p - p0]:
                     bad_out[0], bad_out[1] = p, l
                     return 0
-        status = _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+        status = _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, P, wrench, scale, p0, p1,
                               K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
         if status != 0:
             return status
+        for p in range(p0, p1):
+            work = 0.0
+            for i in range(6):
+                work += wrench[p, i] * t_out[p, i]
+            for k in range(E):
+                if work > 0.0:
+                    acc = 0.0
+                    for l in range(L):
+                        acc += energy_out[p, l, k]
+                    contrib_out[p, k] = acc / work
+                else:
+                    contrib_out[p, k] = np.nan
     return 0

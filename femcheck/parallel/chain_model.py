@@ -144,9 +144,9 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         out = evaluate_fused(device, P, W, scale, model, joints)
         if len(out) == 2:
             _raise_unreachable(device, P, *out)
-        K_T, S_T, t, K_leg, W_C, energy, k_h, iterations = out
+        K_T, S_T, t, K_leg, W_C, energy, k_h, iterations, contributions = out
         return _result(model, joints, P, lambda: solve_legs(device, P), W, K_T, S_T, t, K_leg, W_C, names, energy,
-                       k_h, iterations)
+                       k_h, iterations, contributions)
     state = state if state is not None else solve_legs(device, poses, backend=backend)
     n = state.n
     if not state.ok.all():
@@ -213,10 +213,12 @@ def _raise_unreachable(device, poses, k: int, leg: int):
                                f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
 
 
-def _result(model, joints, poses, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations) -> ParallelResult:
-    work = np.einsum("ni,ni->n", W, t)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
+def _result(model, joints, poses, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations,
+            contributions=None) -> ParallelResult:
+    if contributions is None:
+        work = np.einsum("ni,ni->n", W, t)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
     return ParallelResult(model=model, joints=joints, poses=poses, wrench=W, K=K_T, S=S_T, twist=t,
                           leg_stiffness=K_leg, leg_wrench=W_C, element_names=names, element_energy=energy,
                           contributions=contributions, hertz_stiffness=k_h, iterations=iterations, state_source=state)

@@ -104,19 +104,20 @@ def fused_available(device, joints: str) -> bool:
 def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
     """Inverse kinematics and chain model of the TCP poses P (n, 6) (validated by the caller) in one compiled call
     (:func:`femcheck.parallel.chain_kernel.evaluate_kernel`; the device must be :func:`fused_available`):
-    the tuple of :func:`evaluate_compiled`, or ``(pose, leg)`` of the first pose a leg cannot reach (inside its
-    joint limits), as a 2-tuple of ints."""
+    the tuple of :func:`evaluate_compiled` followed by the contributions (n, E), or ``(pose, leg)`` of the first
+    pose a leg cannot reach (inside its joint limits), as a 2-tuple of ints."""
     from femcheck.parallel import chain_kernel as kern
     tb = device_tables(device)
-    R, C_t = _targets(tb, device, P)
-    out = _outputs(tb, P.shape[0], device.n_legs)
+    n = P.shape[0]
+    out = _outputs(tb, n, device.n_legs)
+    contributions = np.empty((n, tb.n_elem))
     bad = np.empty(2, dtype=np.int64)
-    status = kern.evaluate_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), R, C_t,
-                                  np.ascontiguousarray(P[:, :3]), np.ascontiguousarray(W), np.ascontiguousarray(scale),
-                                  *out, bad)
+    status = kern.evaluate_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
+                                  np.ascontiguousarray(P), np.ascontiguousarray(W), np.ascontiguousarray(scale),
+                                  *out, contributions, bad)
     if bad[0] >= 0:
         return int(bad[0]), int(bad[1])
-    return _finish(tb, device, model, status, out)
+    return _finish(tb, device, model, status, out) + (contributions,)
 
 
 def _outputs(tb, n: int, L: int):

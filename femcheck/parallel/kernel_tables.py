@@ -140,7 +140,7 @@ def _build(device) -> DeviceTables:
             released_ok = False
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home)
+           f_leg, b_plat, kinds, R_home, np.asarray(device.tcp_offset, float).copy())
     return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik)
 
 
