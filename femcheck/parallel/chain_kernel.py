@@ -309,15 +309,33 @@ def _s_axes(R, A, T, q1, out):
             out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
 
 
+@njit(cache=True, error_model="numpy")
+def _row(A, l, k, out):
+    """out (3,) = A[l, k] copied (no view)."""
+    out[0], out[1], out[2] = A[l, k, 0], A[l, k, 1], A[l, k, 2]
+
+
+@njit(cache=True, error_model="numpy")
+def _rows3(A, l, k, out):
+    """out (3, 3) = A[l, k:k+3] copied (no view)."""
+    for j in range(3):
+        for i in range(3):
+            out[j, i] = A[l, k + j, i]
+
+
 @njit(cache=True, error_model="numpy", inline="always")  # inlined: ~20 array arguments per call otherwise
-def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3,
-                 full, want_q):
+def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, vecs, mats, full, want_q):
     """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
     boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution.
 
     ``full``: every joint value and twist (the state of :func:`ik_kernel`). Otherwise (the fused
     :func:`evaluate_kernel`) only what the chain model reads: the actuated joint's value and twist, the
-    transforms and C; the passive joint angles (arctan2, arcsin) only if ``want_q`` (a joint limit on them)."""
+    transforms and C; the passive joint angles (arctan2, arcsin) only if ``want_q`` (a joint limit on them).
+    vecs, mats: work arrays (unpacked below); the leg's axes and centres are first copied into a_u, a_1, a_2,
+    c_S, c_U (3,) and S3 (3, 3), so that the helpers take whole arrays, not views (in machine code a view costs
+    a reference count)."""
+    w3, z3, v3, ang, a_u, a_1, a_2, c_S, c_U = vecs
+    Rn, Ra, Rb, Rs, A3, T3, Sx, I3, S3 = mats
     kind = i_n[l, 7]
     for i in range(3):
         for j in range(3):
@@ -325,8 +343,12 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
             Rn[i, j] = R_t[i, 0] * R_home[j, 0] + R_t[i, 1] * R_home[j, 1] + R_t[i, 2] * R_home[j, 2]
             I3[i, j] = 1.0 if i == j else 0.0
     if kind == 1:   # F-P*-S-U: dofs [P, S1, S2, S3, U1, U2]
-        u = daxis[l, 0]
-        cS, cU = cen[l, 1], cen[l, 2]
+        _row(daxis, l, 0, a_u)
+        _row(daxis, l, 4, a_1)
+        _row(daxis, l, 5, a_2)
+        _row(cen, l, 1, c_S)
+        _row(cen, l, 2, c_U)
+        u, cS, cU = a_u, c_S, c_U
         b, rr, L2 = 0.0, 0.0, 0.0
         for i in range(3):
             ri = C_t[i] - cS[i]
@@ -343,15 +365,16 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         for i in range(3):
             v3[i] = Rn[0, i] * w3[0] + Rn[1, i] * w3[1] + Rn[2, i] * w3[2]   # R_nd^T d
         # Rot(a2, t1) Rot(a1, t2) d_home = R_nd^T d  with t1 = -q5, t2 = -q4
-        if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang, want_q):
+        if not _sp2(a_2, a_1, z3, v3, w3, ang, want_q):
             return False
         q[5], q[4] = -ang[0], -ang[1]
-        _rodrigues_cs(daxis[l, 5], ang[2], ang[3], Ra)
-        _rodrigues_cs(daxis[l, 4], ang[4], ang[5], Rb)
+        _rodrigues_cs(a_2, ang[2], ang[3], Ra)
+        _rodrigues_cs(a_1, ang[4], ang[5], Rb)
         _mm3(Rn, Ra, T3)
         _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
         if want_q:
-            _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
+            _rows3(daxis, l, 1, S3)
+            _cardan(S3, Rs, q, 1, A3, T3)
         for i in range(3):
             v3[i] = cS[i] + u[i] * q[0]                          # B
         _set_transform(Rp, tp, 0, I3, cS, cS)
@@ -365,12 +388,16 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
             _s_axes(I3, A3, T3, q[1], Sx)
             for k in range(3):
                 _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
-            _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
-            _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
+            _set_twist(tw, 4, Rs, a_1, C, C, True)
+            _set_twist(tw, 5, Rn, a_2, C, C, True)
         return True
     # U-P*-S: dofs [U1, U2, P, S1, S2, S3]
-    u = daxis[l, 2]
-    cU, cS = cen[l, 0], cen[l, 1]
+    _row(daxis, l, 2, a_u)
+    _row(daxis, l, 0, a_1)
+    _row(daxis, l, 1, a_2)
+    _row(cen, l, 0, c_U)
+    _row(cen, l, 1, c_S)
+    u, cU, cS = a_u, c_U, c_S
     L0, Lw, sg = 0.0, 0.0, 0.0
     for i in range(3):
         z3[i] = cS[i] - cU[i]
@@ -385,17 +412,18 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         w3[i] /= Lw
         sg += u[i] * z3[i]
     q[2] = (Lw - L0) / sg
-    if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang, want_q):
+    if not _sp2(a_1, a_2, z3, w3, v3, ang, want_q):
         return False
     q[0], q[1] = ang[0], ang[1]
-    _rodrigues_cs(daxis[l, 0], ang[2], ang[3], Ra)
-    _rodrigues_cs(daxis[l, 1], ang[4], ang[5], Rb)
+    _rodrigues_cs(a_1, ang[2], ang[3], Ra)
+    _rodrigues_cs(a_2, ang[4], ang[5], Rb)
     _mm3(Ra, Rb, Sx)                                             # R_U
     for i in range(3):
         for j in range(3):
             Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_S = R_U^T R_nd
     if want_q:
-        _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
+        _rows3(daxis, l, 3, S3)
+        _cardan(S3, Rs, q, 3, A3, T3)
     for i in range(3):
         for j in range(3):
             Rb[i, j] = Sx[i, j]                                  # keep R_U
@@ -413,8 +441,8 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
     _set_transform(Rp, tp, 6, Rn, cS, C)
     _set_twist(tw, 2, Rb, u, C, C, False)
     if full:
-        _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
-        _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
+        _set_twist(tw, 0, I3, a_1, C, cU, True)
+        _set_twist(tw, 1, Ra, a_2, C, cU, True)
         _s_axes(Rb, A3, T3, q[3], Sx)
         for k in range(3):
             _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
@@ -461,6 +489,10 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
     w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(6)
     Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
+    a_u, a_1, a_2, c_S, c_U, Ct3 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    S3, Rt3 = np.zeros((3, 3)), np.zeros((3, 3))
+    vecs = (w3, z3, v3, ang, a_u, a_1, a_2, c_S, c_U)
+    mats = (Rn, Ra, Rb, Rs, A3, T3, Sx, I3, S3)
     for l in range(L):
         nd = i_n[l, 0]
         want_q = full or i_n[l, 8] > 0
@@ -470,8 +502,12 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 q[k] = 0.0
             closed = False
             if i_n[l, 7] > 0 and not numeric_only:
-                closed = _closed_form(l, i_n, daxis, cen, f_leg, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
-                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3, full, want_q)
+                for i in range(3):
+                    Ct3[i] = C_t[l, p, i]
+                    for k in range(3):
+                        Rt3[i, k] = R_t[p, i, k]
+                closed = _closed_form(l, i_n, daxis, cen, f_leg, Rt3, Ct3, q, R_home, Rp, tp, tw, C, vecs, mats, full,
+                                      want_q)
                 if closed:
                     # the orientation holds by construction (R_nd is the product); check the position
                     res = np.sqrt((C_t[l, p, 0] - C[0]) ** 2 + (C_t[l, p, 1] - C[1]) ** 2 + (C_t[l, p, 2] - C[2]) ** 2)
@@ -561,9 +597,9 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
             nc = i_n[l, 1]
             for m in range(nc - 1):
                 f0 = cen_first[l, m]
-                c0 = cen[l, m]
                 for i in range(3):
-                    cen_out[l, jp, m, i] = Rp[f0, i, 0] * c0[0] + Rp[f0, i, 1] * c0[1] + Rp[f0, i, 2] * c0[2] + tp[f0, i]
+                    cen_out[l, jp, m, i] = (Rp[f0, i, 0] * cen[l, m, 0] + Rp[f0, i, 1] * cen[l, m, 1]
+                                            + Rp[f0, i, 2] * cen[l, m, 2] + tp[f0, i])
             for i in range(3):
                 cen_out[l, jp, nc - 1, i] = C[i]
             for m in range(i_n[l, 2]):
@@ -574,10 +610,10 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 len_out[l, jp, m] = ln
                 z0, z1, z2 = d0 / ln, d1 / ln, d2 / ln
-                xa = lk_x[l, m]
-                x0 = Rp[body, 0, 0] * xa[0] + Rp[body, 0, 1] * xa[1] + Rp[body, 0, 2] * xa[2]
-                x1 = Rp[body, 1, 0] * xa[0] + Rp[body, 1, 1] * xa[1] + Rp[body, 1, 2] * xa[2]
-                x2 = Rp[body, 2, 0] * xa[0] + Rp[body, 2, 1] * xa[1] + Rp[body, 2, 2] * xa[2]
+                xa0, xa1, xa2 = lk_x[l, m, 0], lk_x[l, m, 1], lk_x[l, m, 2]
+                x0 = Rp[body, 0, 0] * xa0 + Rp[body, 0, 1] * xa1 + Rp[body, 0, 2] * xa2
+                x1 = Rp[body, 1, 0] * xa0 + Rp[body, 1, 1] * xa1 + Rp[body, 1, 2] * xa2
+                x2 = Rp[body, 2, 0] * xa0 + Rp[body, 2, 1] * xa1 + Rp[body, 2, 2] * xa2
                 xz = x0 * z0 + x1 * z1 + x2 * z2
                 x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
                 xn = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
@@ -643,10 +679,12 @@ def _hertz_k(F, Es, Rs):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
-    """Ae (m, m) = N^T S_C N of a cantilever link: N's wrenches carried to the link tip E (r = C - E) and into
-    the link frame R, then the sparse local tip compliance (femcheck.compliance.cantilever_beam)."""
-    E, G, A, Ix, Iy, Jt, kappa = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6]
+def _link_form(L, lk_p, l, k, shear, lR, jp, r, Nb, m, Ae, ns, V):
+    """Ae[l, ns] (m, m) = N^T S_C N of link k of leg l: N = Nb[l]'s wrenches carried to the link tip E
+    (r = C - E) and into the link frame R = lR[l, jp, k], then the sparse local tip compliance
+    (femcheck.compliance.cantilever_beam) of length L and section lk_p[l, k]. Indexed in place (no views)."""
+    E, G, A, Ix, Iy, Jt, kappa = (lk_p[l, k, 0], lk_p[l, k, 1], lk_p[l, k, 2], lk_p[l, k, 3], lk_p[l, k, 4],
+                                  lk_p[l, k, 5], lk_p[l, k, 6])
     lat = L / (kappa * G * A) if shear else 0.0
     s00 = L ** 3 / (3.0 * E * Iy) + lat
     s04 = L ** 2 / (2.0 * E * Iy)
@@ -657,35 +695,36 @@ def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
     s22 = L / (E * A)
     s55 = L / (G * Jt)
     for a in range(m):
-        f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
-        m0 = Nb[3, a] + r[1] * f2 - r[2] * f1
-        m1 = Nb[4, a] + r[2] * f0 - r[0] * f2
-        m2 = Nb[5, a] + r[0] * f1 - r[1] * f0
-        for k in range(3):
-            V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
-            V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+        f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
+        m0 = Nb[l, 3, a] + r[1] * f2 - r[2] * f1
+        m1 = Nb[l, 4, a] + r[2] * f0 - r[0] * f2
+        m2 = Nb[l, 5, a] + r[0] * f1 - r[1] * f0
+        for c in range(3):
+            R0, R1, R2 = lR[l, jp, k, 0, c], lR[l, jp, k, 1, c], lR[l, jp, k, 2, c]
+            V[a, c] = R0 * f0 + R1 * f1 + R2 * f2
+            V[a, 3 + c] = R0 * m0 + R1 * m1 + R2 * m2
     for a in range(m):
         for b in range(a, m):
             v = (s00 * V[a, 0] * V[b, 0] + s04 * (V[a, 0] * V[b, 4] + V[a, 4] * V[b, 0]) + s44 * V[a, 4] * V[b, 4]
                  + s11 * V[a, 1] * V[b, 1] + s13 * (V[a, 1] * V[b, 3] + V[a, 3] * V[b, 1]) + s33 * V[a, 3] * V[b, 3]
                  + s22 * V[a, 2] * V[b, 2] + s55 * V[a, 5] * V[b, 5])
-            Ae[a, b] = v
-            Ae[b, a] = v
+            Ae[l, ns, a, b] = v
+            Ae[l, ns, b, a] = v
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _sym_add(K, E, M, m, sign, xv):
-    """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
+def _sym_add(K, E, M, l, m, sign, xv):
+    """K[upper] += sign E[l] M[l] E[l]^T, E[l] (6, m), M[l] (m, m) (indexed in place, no views)."""
     for i in range(6):
         for a in range(m):
             acc = 0.0
             for b in range(m):
-                acc += E[i, b] * M[b, a]
+                acc += E[l, i, b] * M[l, b, a]
             xv[a] = acc
         for j in range(i, 6):
             acc = 0.0
             for a in range(m):
-                acc += xv[a] * E[j, a]
+                acc += xv[a] * E[l, j, a]
             K[i, j] += sign * acc
 
 
@@ -756,9 +795,13 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     Ht = np.zeros(3)
     YHt = np.zeros(3)
     HY = np.zeros((6, 3))
+    Mt = np.zeros((6, 6))
+    wv = np.zeros(6)
     ik_kind = i_n[:, 7]
     for p in range(p0, p1):
         jp = p - p0
+        for i in range(6):
+            wv[i] = wrench[p, i]
         for i in range(6):
             for j in range(6):
                 K0[i, j] = 0.0
@@ -792,7 +835,7 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 en = lk_i[l, k, 1]
                 for i in range(3):
                     r3[i] = C[l, jp, i] - cen[l, jp, en, i]
-                _link_form(llen[l, jp, k], lk_p[l, k], shear, lR[l, jp, k], r3, Nb[l], m, Ae[l, ns], V)
+                _link_form(llen[l, jp, k], lk_p, l, k, shear, lR, jp, r3, Nb, m, Ae, ns, V)
                 f = scale[p, l, kind]
                 for a in range(m):
                     for b in range(m):
@@ -801,11 +844,11 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 ns += 1
             if detailed:
                 c = f_leg[l, 0] * scale[p, l, k_drive]
-                x = tw[l, jp, i_n[l, 6]]
+                ia = i_n[l, 6]
                 for a in range(m):
                     acc = 0.0
                     for i in range(6):
-                        acc += Nb[l, i, a] * x[i]
+                        acc += Nb[l, i, a] * tw[l, jp, ia, i]
                     xi[a] = acc
                 for a in range(m):
                     for b in range(m):
@@ -818,11 +861,12 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                         for b in range(m):
                             Ae[l, ns, a, b] = 0.0
                     for j in range(i_n[l, 3]):
-                        R = lR[l, jp, hl_link[l, j]]
+                        hk = hl_link[l, j]
                         for k in range(3):
                             ck = f * (hl_c[l, j, 0] + (hl_c[l, j, 1] if k == 2 else 0.0))
+                            R0, R1, R2 = lR[l, jp, hk, 0, k], lR[l, jp, hk, 1, k], lR[l, jp, hk, 2, k]
                             for a in range(m):
-                                xi[a] = R[0, k] * Nb[l, 0, a] + R[1, k] * Nb[l, 1, a] + R[2, k] * Nb[l, 2, a]
+                                xi[a] = R0 * Nb[l, 0, a] + R1 * Nb[l, 1, a] + R2 * Nb[l, 2, a]
                             for a in range(m):
                                 for b in range(m):
                                     Ae[l, ns, a, b] += ck * xi[a] * xi[b]
@@ -859,8 +903,11 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             mode[l] = 2 if nhp > 0 else 0
             if not _chol(A0, Lf, m):
                 return -1 - p
-            _chol_inverse(Lf, Mi[l], ev, xv, m)
-            _sym_add(K0, E[l], Mi[l], m, 1.0, xv)
+            _chol_inverse(Lf, Mt, ev, xv, m)
+            for a in range(m):
+                for b in range(m):
+                    Mi[l, a, b] = Mt[a, b]
+            _sym_add(K0, E, Mi, l, m, 1.0, xv)
             if mode[l] == 2:
                 for a in range(m):
                     for k in range(3):
@@ -917,7 +964,7 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     K[j, i] = K[i, j]
             if not _chol(K, Lf, 6):
                 return -1 - p
-            _chol_solve(Lf, wrench[p], t, 6)
+            _chol_solve(Lf, wv, t, 6)
             if not any_hp:
                 break
             # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
@@ -960,7 +1007,10 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             t_out[p, i] = t[i]
             for j in range(6):
                 K_out[p, i, j] = K[i, j]
-        _chol_inverse(Lf, S_out[p], ev, xv, 6)
+        _chol_inverse(Lf, Mt, ev, xv, 6)
+        for i in range(6):
+            for j in range(6):
+                S_out[p, i, j] = Mt[i, j]
         for l in range(L):
             m = mm[l]
             for j in range(i_n[l, 4] if detailed else 0):
@@ -1053,11 +1103,11 @@ def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
             for c in range(3):
                 kk = Kx[r, 0] * Kx[0, c] + Kx[r, 1] * Kx[1, c] + Kx[r, 2] * Kx[2, c]
                 R_b[j, r, c] = (1.0 if r == c else 0.0) + a * Kx[r, c] + b * kk
-        R = R_b[j]
         for i in range(3):
-            o = P[p, i] - (R[i, 0] * tcp_off[0] + R[i, 1] * tcp_off[1] + R[i, 2] * tcp_off[2])
+            R0, R1, R2 = R_b[j, i, 0], R_b[j, i, 1], R_b[j, i, 2]
+            o = P[p, i] - (R0 * tcp_off[0] + R1 * tcp_off[1] + R2 * tcp_off[2])
             for l in range(L):
-                C_b[l, j, i] = o + (R[i, 0] * b_plat[l, 0] + R[i, 1] * b_plat[l, 1] + R[i, 2] * b_plat[l, 2])
+                C_b[l, j, i] = o + (R0 * b_plat[l, 0] + R1 * b_plat[l, 1] + R2 * b_plat[l, 2])
 
 
 @njit(cache=True, error_model="numpy")
