@@ -7,7 +7,8 @@ leg), detailed model, both joint idealizations: poses/s of the kernel, of the ge
 (the issue's target is ≤ 1.3), and the largest relative K_T difference. "with IK" is the default call (no
 state given): inverse kinematics and chain model in one compiled call (the fused kernel); "without" is the chain
 kernel on a state solved beforehand. The timings are interleaved (kernel, general, general with IK, in turn, best
-of ``REPEAT`` rounds) so that a busy shared machine loads them alike. Then the closed-form inverse kinematics
+of ``REPEAT`` rounds) so that a busy shared machine loads them alike, and measured in CPU time of the process
+(``time.process_time``; wall time counted the other jobs' share of the two cores). Then the closed-form inverse kinematics
 against the numeric one on the same poses: largest joint-value difference (m or rad) and relative K_T difference
 (6-PSU), joint values (hexapod, rotated poses).
 Then the hexapod and the Delta: poses/s of the detailed model (compiled and numpy, with inverse kinematics),
@@ -25,9 +26,11 @@ REPEAT = 15
 
 
 def _timed(fn):
-    t = time.perf_counter()
+    """CPU seconds of this process spent in ``fn`` (every path timed here is single-threaded: numba kernels
+    and numpy with one BLAS thread), so that time the shared machine gives to other jobs does not count."""
+    t = time.process_time()
     fn()
-    return time.perf_counter() - t
+    return time.process_time() - t
 
 
 def _rates(fns: dict, n: int, repeat: int = REPEAT) -> dict:
