@@ -201,7 +201,8 @@ def _sp1(w, p, z, cs, k, angle):
     y, x = w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2
     r = np.sqrt(x * x + y * y)
     if r > 0.0:
-        cs[k], cs[k + 1] = x / r, y / r
+        ri = 1.0 / r
+        cs[k], cs[k + 1] = x * ri, y * ri
     else:
         cs[k], cs[k + 1] = 1.0, 0.0
     return np.arctan2(y, x) if angle else 0.0
@@ -609,15 +610,16 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 d2 = cen_out[l, jp, en, 2] - cen_out[l, jp, s, 2]
                 ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 len_out[l, jp, m] = ln
-                z0, z1, z2 = d0 / ln, d1 / ln, d2 / ln
+                li = 1.0 / ln
+                z0, z1, z2 = d0 * li, d1 * li, d2 * li
                 xa0, xa1, xa2 = lk_x[l, m, 0], lk_x[l, m, 1], lk_x[l, m, 2]
                 x0 = Rp[body, 0, 0] * xa0 + Rp[body, 0, 1] * xa1 + Rp[body, 0, 2] * xa2
                 x1 = Rp[body, 1, 0] * xa0 + Rp[body, 1, 1] * xa1 + Rp[body, 1, 2] * xa2
                 x2 = Rp[body, 2, 0] * xa0 + Rp[body, 2, 1] * xa1 + Rp[body, 2, 2] * xa2
                 xz = x0 * z0 + x1 * z1 + x2 * z2
                 x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
-                xn = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-                x0, x1, x2 = x0 / xn, x1 / xn, x2 / xn
+                xi = 1.0 / np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+                x0, x1, x2 = x0 * xi, x1 * xi, x2 * xi
                 lR_out[l, jp, m, 0, 0], lR_out[l, jp, m, 1, 0], lR_out[l, jp, m, 2, 0] = x0, x1, x2
                 lR_out[l, jp, m, 0, 1] = z1 * x2 - z2 * x1
                 lR_out[l, jp, m, 1, 1] = z2 * x0 - z0 * x2
