@@ -8,9 +8,9 @@ leg), detailed model, both joint idealizations: poses/s of the kernel, of the ge
 state given): inverse kinematics and chain model in one compiled call (the fused kernel); "without" is the chain
 kernel on a state solved beforehand. The timings are interleaved (kernel, general, general with IK, in turn, best
 of ``REPEAT`` rounds) so that a busy shared machine loads them alike, and measured in CPU time of the process
-(``time.process_time``; wall time counted the other jobs' share of the two cores). Then the closed-form inverse kinematics
-against the numeric one on the same poses: largest joint-value difference (m or rad) and relative K_T difference
-(6-PSU), joint values (hexapod, rotated poses).
+(``time.process_time``; wall time counted the other jobs' share of the two cores). Then the closed-form inverse
+kinematics against the numeric one on the same poses: largest joint-value difference (m or rad) and relative K_T
+difference (6-PSU), joint values (hexapod, rotated poses).
 Then the hexapod and the Delta: poses/s of the detailed model (compiled and numpy, with inverse kinematics),
 and the beam FE's largest relative difference from it at the nine test points (both levels, both idealizations).
 """
