@@ -25,6 +25,10 @@ for released joints the Householder complement of the passive twists), ``A = N^T
 force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
 keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released legs
 with a closed form use their one wrench directly, the force along the line of the S and U centres.
+
+:func:`evaluate_kernel` runs both in one call over all poses, block by block (the default of
+:func:`femcheck.parallel.chain_model.evaluate` when no state is given); there a closed-form leg computes only
+what the chain model reads (no passive joint angles, unless a joint limit needs them, and no passive twists).
 """
 from __future__ import annotations
 
