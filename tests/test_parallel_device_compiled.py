@@ -129,3 +129,68 @@ def test_redundant_legs_take_the_numeric_ik_and_the_numpy_released_model(tmp_pat
         r1 = evaluate(dev, P, [1.0, 2.0, 10.0, 0.0, 0.0, 0.0], joints=joints)
         r2 = evaluate(dev, P, [1.0, 2.0, 10.0, 0.0, 0.0, 0.0], joints=joints, state=b, backend="numpy")
         assert _rel(r2.K, r1.K) < RTOL
+
+
+@pytest.mark.parametrize("joints", ["rigid", "released"])
+def test_fused_path_matches_the_solved_state_path(device_case, joints):
+    """evaluate without a state runs the inverse kinematics and the chain model in one compiled call
+    (evaluate_kernel); with a state, the chain kernel alone. Same equations in the same order, so they agree to
+    rounding (measured: identical); its state, solved on first use, is the compiled inverse kinematics."""
+    name, case = device_case
+    dev = case.device
+    P = _poses(name, case)
+    W = [6.0, -4.0, 10.0, 0.1, -0.05, 0.02]
+    for model in ("simplified", "detailed"):
+        a = evaluate(dev, P, W, model=model, joints=joints)
+        b = evaluate(dev, P, W, model=model, joints=joints, state=solve_legs(dev, P))
+        for x, y in ((a.K, b.K), (a.S, b.S), (a.twist, b.twist), (a.leg_stiffness, b.leg_stiffness),
+                     (a.leg_wrench, b.leg_wrench), (a.element_energy, b.element_energy)):
+            assert _rel(y, x) < 1e-12
+        assert np.allclose(a.contributions, b.contributions, rtol=0, atol=1e-12)
+        assert a.iterations == b.iterations
+        for sa, sb in zip(a.state.legs, solve_legs(dev, P).legs):
+            assert np.array_equal(sa.q, sb.q) and np.array_equal(sa.twists, sb.twists)
+
+
+@pytest.mark.parametrize("name", DEVICES)
+def test_fused_path_reports_an_unreachable_pose_like_the_state_path(name):
+    from femcheck.errors import UnreachablePoseError
+    case = load_case(ROOT / "cases" / f"{name}.toml")
+    P = np.tile(cube_points(case)[0], (3, 1))
+    P[1, 2] += 0.5    # far above: no leg reaches it
+    with pytest.raises(UnreachablePoseError) as fused:
+        evaluate(case.device, P)
+    with pytest.raises(UnreachablePoseError) as solved:
+        evaluate(case.device, P, state=solve_legs(case.device, P))
+    assert str(fused.value) == str(solved.value) and "#1 " in str(fused.value)
+
+
+def test_fused_path_checks_a_limit_on_a_passive_joint():
+    """The fused closed form skips the passive joint angles unless a joint limit needs them. Case files limit only
+    R and P joints (in the closed-form legs, the actuated P), so the limit is put on the hexapod's base U joint
+    (its first angle) in the device object, at the median of its range over rotated poses, so that some poses
+    exceed it. Both paths must refuse the same first pose and agree on the others."""
+    import dataclasses
+
+    from femcheck.errors import UnreachablePoseError
+    dev0 = load_case(ROOT / "cases" / "hexapod_6ups.toml").device
+    case = load_case(ROOT / "cases" / "hexapod_6ups.toml")
+    rng = np.random.default_rng(11)
+    P = np.tile(cube_points(case)[0], (40, 1))
+    P[:, 3:] += rng.uniform(-0.4, 0.4, (40, 3))
+    free = solve_legs(dev0, P)
+    assert free.ok.all()
+    lim = float(np.median([np.abs(s.q[:, 0]).max() for s in free.legs]))
+    dev = dataclasses.replace(dev0, legs=tuple(dataclasses.replace(leg, limits=leg.limits + ((0, -lim, lim),))
+                                               for leg in dev0.legs))
+    assert (device_tables(dev).tab[0][:, 8] == 1).all() and (device_tables(dev).ik_kind == IK_UPS).all()
+    state = solve_legs(dev, P)
+    assert not state.ok.all() and state.ok.any()
+    with pytest.raises(UnreachablePoseError) as fused:
+        evaluate(dev, P)
+    with pytest.raises(UnreachablePoseError) as solved:
+        evaluate(dev, P, state=state)
+    assert str(fused.value) == str(solved.value)
+    ok = P[state.ok]
+    a, b = evaluate(dev, ok, [0, 0, 10, 0, 0, 0]), evaluate(dev, ok, [0, 0, 10, 0, 0, 0], state=solve_legs(dev, ok))
+    assert _rel(b.K, a.K) < 1e-12

@@ -25,6 +25,10 @@ for released joints the Householder complement of the passive twists), ``A = N^T
 force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
 keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released legs
 with a closed form use their one wrench directly, the force along the line of the S and U centres.
+
+:func:`evaluate_kernel` runs both in one call over all poses, block by block (the default of
+:func:`femcheck.parallel.chain_model.evaluate` when no state is given); there a closed-form leg computes only
+what the chain model reads (no passive joint angles, unless a joint limit needs them, and no passive twists).
 """
 from __future__ import annotations
 
@@ -191,8 +195,9 @@ def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw):
 
 # ---------------------------------------------------------------- closed forms
 @njit(cache=True, error_model="numpy")
-def _sp1(w, p, z, cs, k):
-    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2])."""
+def _sp1(w, p, z, cs, k, angle):
+    """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2]);
+    the angle itself (an arctan2) only if ``angle``, else 0."""
     wp = w[0] * p[0] + w[1] * p[1] + w[2] * p[2]
     wz = w[0] * z[0] + w[1] * z[1] + w[2] * z[2]
     p0, p1, p2 = p[0] - w[0] * wp, p[1] - w[1] * wp, p[2] - w[2] * wp
@@ -201,17 +206,18 @@ def _sp1(w, p, z, cs, k):
     y, x = w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2
     r = np.sqrt(x * x + y * y)
     if r > 0.0:
-        cs[k], cs[k + 1] = x / r, y / r
+        ri = 1.0 / r
+        cs[k], cs[k + 1] = x * ri, y * ri
     else:
         cs[k], cs[k + 1] = 1.0, 0.0
-    return np.arctan2(y, x)
+    return np.arctan2(y, x) if angle else 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def _sp2(w1, w2, p, qv, z, out):
+def _sp2(w1, w2, p, qv, z, out, angles):
     """Paden-Kahan subproblem 2: Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point), the solution whose
-    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2);
-    False if none is real."""
+    intermediate z = Rot(w2, t2) p is nearest p (the home branch). out = (t1, t2, cos t1, sin t1, cos t2, sin t2)
+    (t1, t2 only if ``angles``); False if none is real."""
     c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
     den = 1.0 - c12 * c12
     if den < 1e-12:
@@ -240,8 +246,8 @@ def _sp2(w1, w2, p, qv, z, out):
             best = d
             for i in range(3):
                 z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-    out[1] = _sp1(w2, p, z, out, 4)
-    out[0] = _sp1(w1, z, qv, out, 2)
+    out[1] = _sp1(w2, p, z, out, 4, angles)
+    out[0] = _sp1(w1, z, qv, out, 2, angles)
     return True
 
 
@@ -309,10 +315,33 @@ def _s_axes(R, A, T, q1, out):
             out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
 
 
+@njit(cache=True, error_model="numpy")
+def _row(A, l, k, out):
+    """out (3,) = A[l, k] copied (no view)."""
+    out[0], out[1], out[2] = A[l, k, 0], A[l, k, 1], A[l, k, 2]
+
+
+@njit(cache=True, error_model="numpy")
+def _rows3(A, l, k, out):
+    """out (3, 3) = A[l, k:k+3] copied (no view)."""
+    for j in range(3):
+        for i in range(3):
+            out[j, i] = A[l, k + j, i]
+
+
 @njit(cache=True, error_model="numpy", inline="always")  # inlined: ~20 array arguments per call otherwise
-def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, w3, z3, v3, ang, Rn, Ra, Rb, Rs, A3, T3, Sx, I3):
+def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, vecs, mats, full, want_q):
     """Leg l by its closed form (ik_kind 1 or 2): joint values q, the prefix transforms Rp, tp at the joint
-    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution."""
+    boundaries the outputs read, the twists tw at C and C itself; False where it has no real solution.
+
+    ``full``: every joint value and twist (the state of :func:`ik_kernel`). Otherwise (the fused
+    :func:`evaluate_kernel`) only what the chain model reads: the actuated joint's value and twist, the
+    transforms and C; the passive joint angles (arctan2, arcsin) only if ``want_q`` (a joint limit on them).
+    vecs, mats: work arrays (unpacked below); the leg's axes and centres are first copied into a_u, a_1, a_2,
+    c_S, c_U (3,) and S3 (3, 3), so that the helpers take whole arrays, not views (in machine code a view costs
+    a reference count)."""
+    w3, z3, v3, ang, a_u, a_1, a_2, c_S, c_U = vecs
+    Rn, Ra, Rb, Rs, A3, T3, Sx, I3, S3 = mats
     kind = i_n[l, 7]
     for i in range(3):
         for j in range(3):
@@ -320,8 +349,12 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
             Rn[i, j] = R_t[i, 0] * R_home[j, 0] + R_t[i, 1] * R_home[j, 1] + R_t[i, 2] * R_home[j, 2]
             I3[i, j] = 1.0 if i == j else 0.0
     if kind == 1:   # F-P*-S-U: dofs [P, S1, S2, S3, U1, U2]
-        u = daxis[l, 0]
-        cS, cU = cen[l, 1], cen[l, 2]
+        _row(daxis, l, 0, a_u)
+        _row(daxis, l, 4, a_1)
+        _row(daxis, l, 5, a_2)
+        _row(cen, l, 1, c_S)
+        _row(cen, l, 2, c_U)
+        u, cS, cU = a_u, c_S, c_U
         b, rr, L2 = 0.0, 0.0, 0.0
         for i in range(3):
             ri = C_t[i] - cS[i]
@@ -338,14 +371,16 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         for i in range(3):
             v3[i] = Rn[0, i] * w3[0] + Rn[1, i] * w3[1] + Rn[2, i] * w3[2]   # R_nd^T d
         # Rot(a2, t1) Rot(a1, t2) d_home = R_nd^T d  with t1 = -q5, t2 = -q4
-        if not _sp2(daxis[l, 5], daxis[l, 4], z3, v3, w3, ang):
+        if not _sp2(a_2, a_1, z3, v3, w3, ang, want_q):
             return False
         q[5], q[4] = -ang[0], -ang[1]
-        _rodrigues_cs(daxis[l, 5], ang[2], ang[3], Ra)
-        _rodrigues_cs(daxis[l, 4], ang[4], ang[5], Rb)
+        _rodrigues_cs(a_2, ang[2], ang[3], Ra)
+        _rodrigues_cs(a_1, ang[4], ang[5], Rb)
         _mm3(Rn, Ra, T3)
         _mm3(T3, Rb, Rs)                                         # R_S = R_nd Rot(a2, -q5) Rot(a1, -q4)
-        _cardan(daxis[l, 1:4], Rs, q, 1, A3, T3)
+        if want_q:
+            _rows3(daxis, l, 1, S3)
+            _cardan(S3, Rs, q, 1, A3, T3)
         for i in range(3):
             v3[i] = cS[i] + u[i] * q[0]                          # B
         _set_transform(Rp, tp, 0, I3, cS, cS)
@@ -355,15 +390,20 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
             C[i] = Rs[i, 0] * z3[0] + Rs[i, 1] * z3[1] + Rs[i, 2] * z3[2] + v3[i]
         _set_transform(Rp, tp, 6, Rn, cU, C)
         _set_twist(tw, 0, I3, u, C, C, False)
-        _s_axes(I3, A3, T3, q[1], Sx)
-        for k in range(3):
-            _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
-        _set_twist(tw, 4, Rs, daxis[l, 4], C, C, True)
-        _set_twist(tw, 5, Rn, daxis[l, 5], C, C, True)
+        if full:
+            _s_axes(I3, A3, T3, q[1], Sx)
+            for k in range(3):
+                _set_twist(tw, 1 + k, I3, Sx[k], C, v3, True)
+            _set_twist(tw, 4, Rs, a_1, C, C, True)
+            _set_twist(tw, 5, Rn, a_2, C, C, True)
         return True
     # U-P*-S: dofs [U1, U2, P, S1, S2, S3]
-    u = daxis[l, 2]
-    cU, cS = cen[l, 0], cen[l, 1]
+    _row(daxis, l, 2, a_u)
+    _row(daxis, l, 0, a_1)
+    _row(daxis, l, 1, a_2)
+    _row(cen, l, 0, c_U)
+    _row(cen, l, 1, c_S)
+    u, cU, cS = a_u, c_U, c_S
     L0, Lw, sg = 0.0, 0.0, 0.0
     for i in range(3):
         z3[i] = cS[i] - cU[i]
@@ -378,16 +418,18 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         w3[i] /= Lw
         sg += u[i] * z3[i]
     q[2] = (Lw - L0) / sg
-    if not _sp2(daxis[l, 0], daxis[l, 1], z3, w3, v3, ang):
+    if not _sp2(a_1, a_2, z3, w3, v3, ang, want_q):
         return False
     q[0], q[1] = ang[0], ang[1]
-    _rodrigues_cs(daxis[l, 0], ang[2], ang[3], Ra)
-    _rodrigues_cs(daxis[l, 1], ang[4], ang[5], Rb)
+    _rodrigues_cs(a_1, ang[2], ang[3], Ra)
+    _rodrigues_cs(a_2, ang[4], ang[5], Rb)
     _mm3(Ra, Rb, Sx)                                             # R_U
     for i in range(3):
         for j in range(3):
             Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_S = R_U^T R_nd
-    _cardan(daxis[l, 3:6], Rs, q, 3, A3, T3)
+    if want_q:
+        _rows3(daxis, l, 3, S3)
+        _cardan(S3, Rs, q, 3, A3, T3)
     for i in range(3):
         for j in range(3):
             Rb[i, j] = Sx[i, j]                                  # keep R_U
@@ -403,12 +445,13 @@ def _closed_form(l, i_n, daxis, cen, f_leg, R_t, C_t, q, R_home, Rp, tp, tw, C, 
         w3[i] = cU[i] - u[i] * q[2]
     _set_transform(Rp, tp, 3, Rb, w3, cU)                        # after the slide: R_U (x + u q - c_U) + c_U
     _set_transform(Rp, tp, 6, Rn, cS, C)
-    _set_twist(tw, 0, I3, daxis[l, 0], C, cU, True)
-    _set_twist(tw, 1, Ra, daxis[l, 1], C, cU, True)
     _set_twist(tw, 2, Rb, u, C, C, False)
-    _s_axes(Rb, A3, T3, q[3], Sx)
-    for k in range(3):
-        _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
+    if full:
+        _set_twist(tw, 0, I3, a_1, C, cU, True)
+        _set_twist(tw, 1, Ra, a_2, C, cU, True)
+        _s_axes(Rb, A3, T3, q[3], Sx)
+        for k in range(3):
+            _set_twist(tw, 3 + k, I3, Sx[k], C, C, True)
     return True
 
 
@@ -422,10 +465,18 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
     C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
     """
+    _ik_range(tab, R_t, C_t, numeric_only, True, 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
+              tw_out, lR_out, len_out)
+
+
+@njit(cache=True, error_model="numpy")
+def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out, closed_out, C_out, cen_out, tw_out,
+              lR_out, len_out):
+    """:func:`ik_kernel` on the poses p0 <= p < p1, written at index p - p0 of the outputs. ``full``: the whole
+    state; otherwise a closed-form leg writes only what the chain model reads (:func:`_closed_form`)."""
     i_n, dkind, daxis, dpoint, cen, cen_first, lk_i, lk_x, lim_d, lim, f_leg, R_home = (
         tab[0], tab[1], tab[2], tab[3], tab[5], tab[6], tab[7], tab[8], tab[13], tab[14], tab[15], tab[18])
     L = i_n.shape[0]
-    n = R_t.shape[0]
     ndm = q_out.shape[2]
     Rp = np.zeros((ndm + 1, 3, 3))
     tp = np.zeros((ndm + 1, 3))
@@ -444,15 +495,25 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     w3, z3, v3, ang = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(6)
     Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
+    a_u, a_1, a_2, c_S, c_U, Ct3 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    S3, Rt3 = np.zeros((3, 3)), np.zeros((3, 3))
+    vecs = (w3, z3, v3, ang, a_u, a_1, a_2, c_S, c_U)
+    mats = (Rn, Ra, Rb, Rs, A3, T3, Sx, I3, S3)
     for l in range(L):
         nd = i_n[l, 0]
-        for p in range(n):
+        want_q = full or i_n[l, 8] > 0
+        for p in range(p0, p1):
+            jp = p - p0
             for k in range(ndm):
                 q[k] = 0.0
             closed = False
             if i_n[l, 7] > 0 and not numeric_only:
-                closed = _closed_form(l, i_n, daxis, cen, f_leg, R_t[p], C_t[l, p], q, R_home, Rp, tp, tw, C, w3, z3, v3, ang,
-                                      Rn, Ra, Rb, Rs, A3, T3, Sx, I3)
+                for i in range(3):
+                    Ct3[i] = C_t[l, p, i]
+                    for k in range(3):
+                        Rt3[i, k] = R_t[p, i, k]
+                closed = _closed_form(l, i_n, daxis, cen, f_leg, Rt3, Ct3, q, R_home, Rp, tp, tw, C, vecs, mats, full,
+                                      want_q)
                 if closed:
                     # the orientation holds by construction (R_nd is the product); check the position
                     res = np.sqrt((C_t[l, p, 0] - C[0]) ** 2 + (C_t[l, p, 1] - C[1]) ** 2 + (C_t[l, p, 2] - C[2]) ** 2)
@@ -518,52 +579,57 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
                 _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
                 res = _end_error(l, i_n, cen, Rp, tp, R_t[p], C_t[l, p], C, e, Rend, Rerr, R_home)
             # ---- outputs of the converged configuration
-            closed_out[l, p] = closed
-            res_out[l, p] = res
+            closed_out[l, jp] = closed
+            res_out[l, jp] = res
             ok = res < TOL
             for j in range(i_n[l, 5]):
                 v = q[lim_d[l, j]]
                 if not (v >= lim[l, j, 0] and v <= lim[l, j, 1]):
                     ok = False
-            ok_out[l, p] = ok
+            ok_out[l, jp] = ok
             for k in range(ndm):
-                q_out[l, p, k] = q[k]
+                q_out[l, jp, k] = q[k]
             for i in range(3):
-                C_out[l, p, i] = C[i]
+                C_out[l, jp, i] = C[i]
             if not closed:
                 _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw)
-            for k in range(nd):
+            if full or not closed:
+                for k in range(nd):
+                    for i in range(6):
+                        tw_out[l, jp, k, i] = tw[k, i]
+            else:                                   # the chain model reads only the actuated twist
                 for i in range(6):
-                    tw_out[l, p, k, i] = tw[k, i]
+                    tw_out[l, jp, i_n[l, 6], i] = tw[i_n[l, 6], i]
             nc = i_n[l, 1]
             for m in range(nc - 1):
                 f0 = cen_first[l, m]
-                c0 = cen[l, m]
                 for i in range(3):
-                    cen_out[l, p, m, i] = Rp[f0, i, 0] * c0[0] + Rp[f0, i, 1] * c0[1] + Rp[f0, i, 2] * c0[2] + tp[f0, i]
+                    cen_out[l, jp, m, i] = (Rp[f0, i, 0] * cen[l, m, 0] + Rp[f0, i, 1] * cen[l, m, 1]
+                                            + Rp[f0, i, 2] * cen[l, m, 2] + tp[f0, i])
             for i in range(3):
-                cen_out[l, p, nc - 1, i] = C[i]
+                cen_out[l, jp, nc - 1, i] = C[i]
             for m in range(i_n[l, 2]):
                 s, en, body = lk_i[l, m, 0], lk_i[l, m, 1], lk_i[l, m, 2]
-                d0 = cen_out[l, p, en, 0] - cen_out[l, p, s, 0]
-                d1 = cen_out[l, p, en, 1] - cen_out[l, p, s, 1]
-                d2 = cen_out[l, p, en, 2] - cen_out[l, p, s, 2]
+                d0 = cen_out[l, jp, en, 0] - cen_out[l, jp, s, 0]
+                d1 = cen_out[l, jp, en, 1] - cen_out[l, jp, s, 1]
+                d2 = cen_out[l, jp, en, 2] - cen_out[l, jp, s, 2]
                 ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                len_out[l, p, m] = ln
-                z0, z1, z2 = d0 / ln, d1 / ln, d2 / ln
-                xa = lk_x[l, m]
-                x0 = Rp[body, 0, 0] * xa[0] + Rp[body, 0, 1] * xa[1] + Rp[body, 0, 2] * xa[2]
-                x1 = Rp[body, 1, 0] * xa[0] + Rp[body, 1, 1] * xa[1] + Rp[body, 1, 2] * xa[2]
-                x2 = Rp[body, 2, 0] * xa[0] + Rp[body, 2, 1] * xa[1] + Rp[body, 2, 2] * xa[2]
+                len_out[l, jp, m] = ln
+                li = 1.0 / ln
+                z0, z1, z2 = d0 * li, d1 * li, d2 * li
+                xa0, xa1, xa2 = lk_x[l, m, 0], lk_x[l, m, 1], lk_x[l, m, 2]
+                x0 = Rp[body, 0, 0] * xa0 + Rp[body, 0, 1] * xa1 + Rp[body, 0, 2] * xa2
+                x1 = Rp[body, 1, 0] * xa0 + Rp[body, 1, 1] * xa1 + Rp[body, 1, 2] * xa2
+                x2 = Rp[body, 2, 0] * xa0 + Rp[body, 2, 1] * xa1 + Rp[body, 2, 2] * xa2
                 xz = x0 * z0 + x1 * z1 + x2 * z2
                 x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
-                xn = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-                x0, x1, x2 = x0 / xn, x1 / xn, x2 / xn
-                lR_out[l, p, m, 0, 0], lR_out[l, p, m, 1, 0], lR_out[l, p, m, 2, 0] = x0, x1, x2
-                lR_out[l, p, m, 0, 1] = z1 * x2 - z2 * x1
-                lR_out[l, p, m, 1, 1] = z2 * x0 - z0 * x2
-                lR_out[l, p, m, 2, 1] = z0 * x1 - z1 * x0
-                lR_out[l, p, m, 0, 2], lR_out[l, p, m, 1, 2], lR_out[l, p, m, 2, 2] = z0, z1, z2
+                xi = 1.0 / np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+                x0, x1, x2 = x0 * xi, x1 * xi, x2 * xi
+                lR_out[l, jp, m, 0, 0], lR_out[l, jp, m, 1, 0], lR_out[l, jp, m, 2, 0] = x0, x1, x2
+                lR_out[l, jp, m, 0, 1] = z1 * x2 - z2 * x1
+                lR_out[l, jp, m, 1, 1] = z2 * x0 - z0 * x2
+                lR_out[l, jp, m, 2, 1] = z0 * x1 - z1 * x0
+                lR_out[l, jp, m, 0, 2], lR_out[l, jp, m, 1, 2], lR_out[l, jp, m, 2, 2] = z0, z1, z2
 
 
 # ---------------------------------------------------------------- the chain model
@@ -620,10 +686,12 @@ def _hertz_k(F, Es, Rs):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
-    """Ae (m, m) = N^T S_C N of a cantilever link: N's wrenches carried to the link tip E (r = C - E) and into
-    the link frame R, then the sparse local tip compliance (femcheck.compliance.cantilever_beam)."""
-    E, G, A, Ix, Iy, Jt, kappa = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6]
+def _link_form(L, lk_p, l, k, shear, lR, jp, r, Nb, m, Ae, ns, V):
+    """Ae[l, ns] (m, m) = N^T S_C N of link k of leg l: N = Nb[l]'s wrenches carried to the link tip E
+    (r = C - E) and into the link frame R = lR[l, jp, k], then the sparse local tip compliance
+    (femcheck.compliance.cantilever_beam) of length L and section lk_p[l, k]. Indexed in place (no views)."""
+    E, G, A, Ix, Iy, Jt, kappa = (lk_p[l, k, 0], lk_p[l, k, 1], lk_p[l, k, 2], lk_p[l, k, 3], lk_p[l, k, 4],
+                                  lk_p[l, k, 5], lk_p[l, k, 6])
     lat = L / (kappa * G * A) if shear else 0.0
     s00 = L ** 3 / (3.0 * E * Iy) + lat
     s04 = L ** 2 / (2.0 * E * Iy)
@@ -634,20 +702,21 @@ def _link_form(L, pr, shear, R, r, Nb, m, Ae, V):
     s22 = L / (E * A)
     s55 = L / (G * Jt)
     for a in range(m):
-        f0, f1, f2 = Nb[0, a], Nb[1, a], Nb[2, a]
-        m0 = Nb[3, a] + r[1] * f2 - r[2] * f1
-        m1 = Nb[4, a] + r[2] * f0 - r[0] * f2
-        m2 = Nb[5, a] + r[0] * f1 - r[1] * f0
-        for k in range(3):
-            V[a, k] = R[0, k] * f0 + R[1, k] * f1 + R[2, k] * f2
-            V[a, 3 + k] = R[0, k] * m0 + R[1, k] * m1 + R[2, k] * m2
+        f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
+        m0 = Nb[l, 3, a] + r[1] * f2 - r[2] * f1
+        m1 = Nb[l, 4, a] + r[2] * f0 - r[0] * f2
+        m2 = Nb[l, 5, a] + r[0] * f1 - r[1] * f0
+        for c in range(3):
+            R0, R1, R2 = lR[l, jp, k, 0, c], lR[l, jp, k, 1, c], lR[l, jp, k, 2, c]
+            V[a, c] = R0 * f0 + R1 * f1 + R2 * f2
+            V[a, 3 + c] = R0 * m0 + R1 * m1 + R2 * m2
     for a in range(m):
         for b in range(a, m):
             v = (s00 * V[a, 0] * V[b, 0] + s04 * (V[a, 0] * V[b, 4] + V[a, 4] * V[b, 0]) + s44 * V[a, 4] * V[b, 4]
                  + s11 * V[a, 1] * V[b, 1] + s13 * (V[a, 1] * V[b, 3] + V[a, 3] * V[b, 1]) + s33 * V[a, 3] * V[b, 3]
                  + s22 * V[a, 2] * V[b, 2] + s55 * V[a, 5] * V[b, 5])
-            Ae[a, b] = v
-            Ae[b, a] = v
+            Ae[l, ns, a, b] = v
+            Ae[l, ns, b, a] = v
 
 
 @njit(cache=True, error_model="numpy")
@@ -703,18 +772,18 @@ def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, sca
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _sym_add(K, E, M, m, sign, xv):
-    """K[upper] += sign E M E^T, E (6, m), M (m, m)."""
+def _sym_add(K, E, M, l, m, sign, xv):
+    """K[upper] += sign E[l] M[l] E[l]^T, E[l] (6, m), M[l] (m, m) (indexed in place, no views)."""
     for i in range(6):
         for a in range(m):
             acc = 0.0
             for b in range(m):
-                acc += E[i, b] * M[b, a]
+                acc += E[l, i, b] * M[l, b, a]
             xv[a] = acc
         for j in range(i, 6):
             acc = 0.0
             for a in range(m):
-                acc += xv[a] * E[j, a]
+                acc += xv[a] * E[l, j, a]
             K[i, j] += sign * acc
 
 
@@ -730,10 +799,18 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
     ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
     Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
+    return _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, 0, tcp.shape[0],
+                        K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
+
+
+@njit(cache=True, error_model="numpy")
+def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+                 K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
+    """:func:`chain_kernel` on the poses p0 <= p < p1: the state arrays (C, cen, tw, lR, llen) at index p - p0,
+    everything else at p."""
     i_n, passive, lk_i, lk_p, hl_c, hl_link, hp, f_leg, kinds = (tab[0], tab[4], tab[7], tab[9], tab[10], tab[11],
                                                                  tab[12], tab[15], tab[17])
     L = i_n.shape[0]
-    n = tcp.shape[0]
     nl = lk_i.shape[1]
     n_slot = nl + 4
     ml_i, ml_S, ml_n, ml_F, ml_d = tab[-1]   # FE-measured joint laws (kernel_tables._measured_law_tables)
@@ -781,8 +858,13 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     Ht = np.zeros(3)
     YHt = np.zeros(3)
     HY = np.zeros((6, 3))
+    Mt = np.zeros((6, 6))
+    wv = np.zeros(6)
     ik_kind = i_n[:, 7]
-    for p in range(n):
+    for p in range(p0, p1):
+        jp = p - p0
+        for i in range(6):
+            wv[i] = wrench[p, i]
         for i in range(6):
             for j in range(6):
                 K0[i, j] = 0.0
@@ -798,15 +880,15 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             elif ik_kind[l] > 0:
                 # F-P-S-U / U-P-S: the one wrench is the force along the line of the S and U centres (through C)
                 o = 1 if ik_kind[l] == 1 else 0
-                d0 = C[l, p, 0] - cen[l, p, o, 0]
-                d1 = C[l, p, 1] - cen[l, p, o, 1]
-                d2 = C[l, p, 2] - cen[l, p, o, 2]
+                d0 = C[l, jp, 0] - cen[l, jp, o, 0]
+                d1 = C[l, jp, 1] - cen[l, jp, o, 1]
+                d2 = C[l, jp, 2] - cen[l, jp, o, 2]
                 dn = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 m = 1
                 Nb[l, 0, 0], Nb[l, 1, 0], Nb[l, 2, 0] = d0 / dn, d1 / dn, d2 / dn
                 Nb[l, 3, 0] = Nb[l, 4, 0] = Nb[l, 5, 0] = 0.0
             else:
-                m = _null_basis(tw[l, p], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
+                m = _null_basis(tw[l, jp], passive[l], i_n[l, 0], Nb[l], Aw, Vr, vn)
             mm[l] = m
             # ---- A_e = N^T S_e N of every element (compliances carried to C_l)
             ns = 0
@@ -816,8 +898,8 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     continue
                 en = lk_i[l, k, 1]
                 for i in range(3):
-                    r3[i] = C[l, p, i] - cen[l, p, en, i]
-                _link_form(llen[l, p, k], lk_p[l, k], shear, lR[l, p, k], r3, Nb[l], m, Ae[l, ns], V)
+                    r3[i] = C[l, jp, i] - cen[l, jp, en, i]
+                _link_form(llen[l, jp, k], lk_p, l, k, shear, lR, jp, r3, Nb, m, Ae, ns, V)
                 f = scale[p, l, kind]
                 for a in range(m):
                     for b in range(m):
@@ -826,11 +908,11 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 ns += 1
             if detailed:
                 c = f_leg[l, 0] * scale[p, l, k_drive]
-                x = tw[l, p, i_n[l, 6]]
+                ia = i_n[l, 6]
                 for a in range(m):
                     acc = 0.0
                     for i in range(6):
-                        acc += Nb[l, i, a] * x[i]
+                        acc += Nb[l, i, a] * tw[l, jp, ia, i]
                     xi[a] = acc
                 for a in range(m):
                     for b in range(m):
@@ -843,11 +925,12 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                         for b in range(m):
                             Ae[l, ns, a, b] = 0.0
                     for j in range(i_n[l, 3]):
-                        R = lR[l, p, hl_link[l, j]]
+                        hk = hl_link[l, j]
                         for k in range(3):
                             ck = f * (hl_c[l, j, 0] + (hl_c[l, j, 1] if k == 2 else 0.0))
+                            R0, R1, R2 = lR[l, jp, hk, 0, k], lR[l, jp, hk, 1, k], lR[l, jp, hk, 2, k]
                             for a in range(m):
-                                xi[a] = R[0, k] * Nb[l, 0, a] + R[1, k] * Nb[l, 1, a] + R[2, k] * Nb[l, 2, a]
+                                xi[a] = R0 * Nb[l, 0, a] + R1 * Nb[l, 1, a] + R2 * Nb[l, 2, a]
                             for a in range(m):
                                 for b in range(m):
                                     Ae[l, ns, a, b] += ck * xi[a] * xi[b]
@@ -877,7 +960,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     A0[a, b] = acc
             # ---- E = G^T N (wrenches at the TCP)
             for i in range(3):
-                r3[i] = C[l, p, i] - tcp[p, i]
+                r3[i] = C[l, jp, i] - tcp[p, i]
             for a in range(m):
                 f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
                 E[l, 0, a], E[l, 1, a], E[l, 2, a] = f0, f1, f2
@@ -904,8 +987,11 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             mode[l] = 2 if nhp > 0 else 0
             if not _chol(A0, Lf, m):
                 return -1 - p
-            _chol_inverse(Lf, Mi[l], ev, xv, m)
-            _sym_add(K0, E[l], Mi[l], m, 1.0, xv)
+            _chol_inverse(Lf, Mt, ev, xv, m)
+            for a in range(m):
+                for b in range(m):
+                    Mi[l, a, b] = Mt[a, b]
+            _sym_add(K0, E, Mi, l, m, 1.0, xv)
             if mode[l] == 2:
                 for a in range(m):
                     for k in range(3):
@@ -976,7 +1062,7 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     K[j, i] = K[i, j]
             if not _chol(K, Lf, 6):
                 return -1 - p
-            _chol_solve(Lf, wrench[p], t, 6)
+            _chol_solve(Lf, wv, t, 6)
             if not any_hp:
                 break
             # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
@@ -1043,7 +1129,10 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             t_out[p, i] = t[i]
             for j in range(6):
                 K_out[p, i, j] = K[i, j]
-        _chol_inverse(Lf, S_out[p], ev, xv, 6)
+        _chol_inverse(Lf, Mt, ev, xv, 6)
+        for i in range(6):
+            for j in range(6):
+                S_out[p, i, j] = Mt[i, j]
         for l in range(L):
             m = mm[l]
             for j in range(i_n[l, 4] if detailed else 0):
@@ -1109,4 +1198,95 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 F2 = WC_out[p, l, 0] ** 2 + WC_out[p, l, 1] ** 2 + WC_out[p, l, 2] ** 2
                 for j in range(i_n[l, 4]):
                     energy_out[p, l, k_hp] += F2 * scale[p, l, k_hp] / kh[l, j]
+    return 0
+
+
+#: poses per block of the fused kernel: the block's leg state (~200 kB for six legs) stays in the cache
+BLOCK = 64
+
+
+@njit(cache=True, error_model="numpy")
+def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
+    """Platform orientation R_b[p - p0] (Rodrigues, as ``femcheck.kinematics.frames.rotvec_to_matrix``:
+    ``I + a K + b K^2``, K = skew(rotation vector), a = sin th / th, b = (1 - cos th) / th^2) and leg attachment
+    targets C_b[l, p - p0] = T - R tcp_offset + R b_l of the poses P[p0:p1] (n, 6)."""
+    L = b_plat.shape[0]
+    Kx = np.zeros((3, 3))
+    for p in range(p0, p1):
+        j = p - p0
+        x, y, z = P[p, 3], P[p, 4], P[p, 5]
+        th2 = x * x + y * y + z * z
+        th = np.sqrt(th2)
+        if th < 1e-8:
+            a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+        else:
+            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th ** 2
+        Kx[0, 0], Kx[0, 1], Kx[0, 2] = 0.0, -z, y
+        Kx[1, 0], Kx[1, 1], Kx[1, 2] = z, 0.0, -x
+        Kx[2, 0], Kx[2, 1], Kx[2, 2] = -y, x, 0.0
+        for r in range(3):
+            for c in range(3):
+                kk = Kx[r, 0] * Kx[0, c] + Kx[r, 1] * Kx[1, c] + Kx[r, 2] * Kx[2, c]
+                R_b[j, r, c] = (1.0 if r == c else 0.0) + a * Kx[r, c] + b * kk
+        for i in range(3):
+            R0, R1, R2 = R_b[j, i, 0], R_b[j, i, 1], R_b[j, i, 2]
+            o = P[p, i] - (R0 * tcp_off[0] + R1 * tcp_off[1] + R2 * tcp_off[2])
+            for l in range(L):
+                C_b[l, j, i] = o + (R0 * b_plat[l, 0] + R1 * b_plat[l, 1] + R2 * b_plat[l, 2])
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_kernel(tab, detailed, released, shear, P, wrench, scale,
+                    K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, contrib_out, bad_out):
+    """Inverse kinematics and chain model of the n TCP poses P (n, 6) in one call, block by block of ``BLOCK``
+    poses: the targets (:func:`_pose_targets`), the legs (:func:`_ik_range`: a closed-form leg computes only
+    what the chain model reads, no passive joint angles or twists), then :func:`_chain_range`. The leg state
+    lives only in block-sized buffers.
+
+    Outputs as :func:`chain_kernel`, and contributions (n, E): each element kind's share of the work
+    ``W . t`` (NaN where it is not positive). bad_out (2,): the first pose and leg without an inverse-kinematics
+    solution inside the joint limits (-1, -1 if none); the kernel stops there and returns 0."""
+    i_n, cen_t, lk_i = tab[0], tab[5], tab[7]
+    L = i_n.shape[0]
+    n = P.shape[0]
+    nd, nc, nl = tab[1].shape[1], cen_t.shape[1], lk_i.shape[1]
+    E = energy_out.shape[2]
+    B = min(BLOCK, max(n, 1))
+    R_b = np.zeros((B, 3, 3))
+    C_b = np.zeros((L, B, 3))
+    q = np.zeros((L, B, nd))
+    res = np.zeros((L, B))
+    ok = np.zeros((L, B), dtype=np.bool_)
+    closed = np.zeros((L, B), dtype=np.bool_)
+    C = np.zeros((L, B, 3))
+    cen = np.zeros((L, B, nc, 3))
+    tw = np.zeros((L, B, nd, 6))
+    lR = np.zeros((L, B, nl, 3, 3))
+    llen = np.ones((L, B, nl))
+    bad_out[0], bad_out[1] = -1, -1
+    for p0 in range(0, n, B):
+        p1 = min(n, p0 + B)
+        _pose_targets(P, p0, p1, tab[19], tab[16], R_b, C_b)
+        _ik_range(tab, R_b, C_b, False, False, 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
+        for p in range(p0, p1):
+            for l in range(L):
+                if not ok[l, p - p0]:
+                    bad_out[0], bad_out[1] = p, l
+                    return 0
+        status = _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, P, wrench, scale, p0, p1,
+                              K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
+        if status != 0:
+            return status
+        for p in range(p0, p1):
+            work = 0.0
+            for i in range(6):
+                work += wrench[p, i] * t_out[p, i]
+            for k in range(E):
+                if work > 0.0:
+                    acc = 0.0
+                    for l in range(L):
+                        acc += energy_out[p, l, k]
+                    contrib_out[p, k] = acc / work
+                else:
+                    contrib_out[p, k] = np.nan
     return 0

@@ -25,13 +25,14 @@ Joint idealizations: ``rigid`` (passive joints carry moments and forces: the leg
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
 from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
 from femcheck.errors import ConvergenceError, UnreachablePoseError
 from femcheck.kinematics.frames import rot6, twist_shift
-from femcheck.parallel.leg_kinematics import DeviceState, released_wrenches, solve_legs
+from femcheck.parallel.leg_kinematics import DeviceState, as_poses, released_wrenches, solve_legs
 
 MODELS = ("simplified", "detailed")
 JOINT_IDEALIZATIONS = ("rigid", "released")
@@ -68,7 +69,15 @@ class ParallelResult:
     contributions: np.ndarray
     hertz_stiffness: dict
     iterations: int
-    state: DeviceState = dataclasses.field(repr=False)
+    #: the inverse kinematics (a DeviceState), or a function solving it on first use of :attr:`state` (the
+    #: fused compiled path keeps no leg state)
+    state_source: object = dataclasses.field(repr=False, compare=False)
+
+    @functools.cached_property
+    def state(self) -> DeviceState:
+        """The inverse kinematics of ``poses`` (:func:`~femcheck.parallel.leg_kinematics.solve_legs`)."""
+        src = self.state_source
+        return src if isinstance(src, DeviceState) else src()
 
     def directional_stiffness(self, direction) -> np.ndarray:
         """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m."""
@@ -167,29 +176,36 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     backend : "compiled" (default: the numba kernels of :mod:`femcheck.parallel.chain_kernel`, the same
         equations one pose at a time) or "numpy" (this function's vectorized transcription, the reference)
     """
-    from femcheck.parallel.compiled import check_backend, evaluate_compiled
+    from femcheck.parallel.compiled import check_backend, evaluate_compiled, evaluate_fused, fused_available
     check_backend(backend)
     if model not in MODELS:
         raise ValueError(f"model: {model!r}; expected one of {list(MODELS)}")
     if joints not in JOINT_IDEALIZATIONS:
         raise ValueError(f"joints: {joints!r}; expected one of {list(JOINT_IDEALIZATIONS)}")
+    names = device.element_names
+    L = device.n_legs
+    if state is None and backend == "compiled" and fused_available(device, joints):
+        # inverse kinematics and chain model in one compiled call; the leg state is solved again only if asked for
+        P = as_poses(poses)
+        W, scale = _load_and_scale(P.shape[0], L, len(names), wrench, element_scale)
+        out = evaluate_fused(device, P, W, scale, model, joints)
+        if len(out) == 2:
+            _raise_unreachable(device, P, *out)
+        K_T, S_T, t, K_leg, W_C, energy, k_h, iterations, contributions = out
+        return _result(model, joints, P, lambda: solve_legs(device, P), W, K_T, S_T, t, K_leg, W_C, names, energy,
+                       k_h, iterations, contributions)
     state = state if state is not None else solve_legs(device, poses, backend=backend)
     n = state.n
     if not state.ok.all():
         k = int(np.flatnonzero(~state.ok)[0])
-        leg = next(i for i, s in enumerate(state.legs) if not s.ok[k])
-        raise UnreachablePoseError(f"#{k} {np.array2string(state.poses[k], precision=4)}", leg,
-                                   f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
-    W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
-    names = device.element_names
-    L = device.n_legs
-    scale = np.ones((n, L, len(names))) if element_scale is None else \
-        np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, len(names))))
+        _raise_unreachable(device, state.poses, k, next(i for i, s in enumerate(state.legs) if not s.ok[k]))
+    W, scale = _load_and_scale(n, L, len(names), wrench, element_scale)
     if backend == "compiled":
         out = evaluate_compiled(device, state, W, scale, model, joints)
         if out is not None:
             K_T, S_T, t, K_leg, W_C, energy, k_h, iterations = out
-            return _result(model, joints, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations)
+            return _result(model, joints, state.poses, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h,
+                           iterations)
     parts = leg_element_compliances(device, state, model)
     parts = [{name: S * scale[:, i, names.index(name), None, None] for name, S in p.items()} for i, p in enumerate(parts)]
     G = [state.G(i) for i in range(L)]
@@ -243,17 +259,32 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         for _, S_e in ladder_parts(i):
             energy[:, i, names.index("measured_law")] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
     k_h = {**k_h, **{key: 1.0 / c for key, c in c_lad.items()}}
-    return _result(model, joints, state, W, K_T, np.linalg.inv(K_T), t, np.stack(K_leg, axis=1), W_C, names, energy,
-                   k_h, len(history) + 1)
+    return _result(model, joints, state.poses, state, W, K_T, np.linalg.inv(K_T), t, np.stack(K_leg, axis=1), W_C,
+                   names, energy, k_h, len(history) + 1)
 
 
-def _result(model, joints, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations) -> ParallelResult:
-    work = np.einsum("ni,ni->n", W, t)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
-    return ParallelResult(model=model, joints=joints, poses=state.poses, wrench=W, K=K_T, S=S_T, twist=t,
+def _load_and_scale(n, L, E, wrench, element_scale):
+    """The wrench (n, 6) and the element compliance factors (n, L, E) broadcast to the poses."""
+    W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
+    scale = np.ones((n, L, E)) if element_scale is None else \
+        np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, E)))
+    return W, scale
+
+
+def _raise_unreachable(device, poses, k: int, leg: int):
+    raise UnreachablePoseError(f"#{k} {np.array2string(poses[k], precision=4)}", leg,
+                               f"no inverse-kinematics solution of leg {device.legs[leg].name!r} inside its joint limits")
+
+
+def _result(model, joints, poses, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h, iterations,
+            contributions=None) -> ParallelResult:
+    if contributions is None:
+        work = np.einsum("ni,ni->n", W, t)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            contributions = np.where(work[:, None] > 0, energy.sum(axis=1) / work[:, None], np.nan)
+    return ParallelResult(model=model, joints=joints, poses=poses, wrench=W, K=K_T, S=S_T, twist=t,
                           leg_stiffness=K_leg, leg_wrench=W_C, element_names=names, element_energy=energy,
-                          contributions=contributions, hertz_stiffness=k_h, iterations=iterations, state=state)
+                          contributions=contributions, hertz_stiffness=k_h, iterations=iterations, state_source=state)
 
 
 def _translational(c):

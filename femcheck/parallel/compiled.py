@@ -29,10 +29,7 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     from femcheck.parallel.leg_kinematics import DeviceState, LegState
     tb = device_tables(device)
     n, L = P.shape[0], device.n_legs
-    R = rotvec_to_matrix(P[:, 3:])
-    origin = P[:, :3] - R @ device.tcp_offset
-    b = tb.tab[16]
-    C_t = np.ascontiguousarray((origin[None, :, :] + np.einsum("nij,lj->lni", R, b)))
+    R, C_t = _targets(tb, device, P)
     i_n = tb.tab[0]
     nd, nc, nl = tb.tab[1].shape[1], tb.tab[5].shape[1], tb.tab[7].shape[1]
     # every entry a leg has is written by the kernel; the padding of shorter legs is never read
@@ -45,13 +42,21 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     tw = np.empty((L, n, nd, 6))
     lR = np.empty((L, n, nl, 3, 3))
     llen = np.empty((L, n, nl))
-    kern.ik_kernel(tb.tab, np.ascontiguousarray(R), C_t, bool(numeric_only), q, res, ok, closed, C, cen, tw, lR, llen)
+    kern.ik_kernel(tb.tab, R, C_t, bool(numeric_only), q, res, ok, closed, C, cen, tw, lR, llen)
     legs = []
     for l in range(L):
         d, m, k = i_n[l, 0], i_n[l, 1], i_n[l, 2]
         legs.append(LegState(q=q[l, :, :d], ok=ok[l], residual=res[l], C=C[l], centres=cen[l, :, :m],
                              twists=tw[l, :, :d], link_R=lR[l, :, :k], link_length=llen[l, :, :k]))
     return DeviceState(poses=P, tcp=P[:, :3], R=R, legs=tuple(legs), packed=(C, cen, tw, lR, llen, closed))
+
+
+def _targets(tb, device, P):
+    """Platform orientations R (n, 3, 3) and leg attachment targets C_t (L, n, 3) of the TCP poses P (n, 6):
+    ``C_t = T - R tcp_offset + R b_i``."""
+    R = np.ascontiguousarray(rotvec_to_matrix(P[:, 3:]))
+    origin = P[:, :3] - R @ device.tcp_offset
+    return R, np.ascontiguousarray(origin[None, :, :] + np.einsum("nij,lj->lni", R, tb.tab[16]))
 
 
 def _packed(device, state):
@@ -76,35 +81,62 @@ def _packed(device, state):
 
 
 def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
-    """The chain model by :func:`femcheck.parallel.chain_kernel.chain_kernel`: (K, S, t, leg stiffness, leg
-    wrench, element energy, hertz stiffness dict, iterations), or None where the kernel does not cover the
-    device (released joints with dependent passive twists: the numpy path then runs)."""
-    from femcheck.errors import ConvergenceError
+    """The chain model by :func:`femcheck.parallel.chain_kernel.chain_kernel` on a solved ``state``: (K, S, t,
+    leg stiffness, leg wrench, element energy, hertz stiffness dict, iterations), or None where the kernel does
+    not cover the device (released joints with dependent passive twists: the numpy path then runs)."""
     from femcheck.parallel import chain_kernel as kern
     tb = device_tables(device)
     if joints == "released" and not tb.released_ok:
         return None
-    n, L = state.n, device.n_legs
     C, cen, tw, lR, llen = _packed(device, state)
-    K = np.empty((n, 6, 6))
-    S = np.empty((n, 6, 6))
-    t = np.empty((n, 6))
-    KL = np.empty((n, L, 6, 6))
-    WC = np.empty((n, L, 6))
-    energy = np.empty((n, L, tb.n_elem))
-    kh = np.full((n, L, tb.hp_joint.shape[1] + tb.ml_joint.shape[1]), np.nan)   # Hertz points, then ladder laws
-    iters = np.zeros(n, dtype=np.int64)
+    out = _outputs(tb, state.n, device.n_legs)
     status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
                                lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
-                               np.ascontiguousarray(scale), K, S, t, KL, WC, energy, kh, iters)
+                               np.ascontiguousarray(scale), *out)
+    return _finish(tb, device, model, status, out)
+
+
+def fused_available(device, joints: str) -> bool:
+    """:func:`evaluate_fused` covers ``device`` with ``joints`` (not released joints with dependent passive twists)."""
+    return joints == "rigid" or device_tables(device).released_ok
+
+
+def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
+    """Inverse kinematics and chain model of the TCP poses P (n, 6) (validated by the caller) in one compiled call
+    (:func:`femcheck.parallel.chain_kernel.evaluate_kernel`; the device must be :func:`fused_available`):
+    the tuple of :func:`evaluate_compiled` followed by the contributions (n, E), or ``(pose, leg)`` of the first
+    pose a leg cannot reach (inside its joint limits), as a 2-tuple of ints."""
+    from femcheck.parallel import chain_kernel as kern
+    tb = device_tables(device)
+    n = P.shape[0]
+    out = _outputs(tb, n, device.n_legs)
+    contributions = np.empty((n, tb.n_elem))
+    bad = np.empty(2, dtype=np.int64)
+    status = kern.evaluate_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
+                                  np.ascontiguousarray(P), np.ascontiguousarray(W), np.ascontiguousarray(scale),
+                                  *out, contributions, bad)
+    if bad[0] >= 0:
+        return int(bad[0]), int(bad[1])
+    return _finish(tb, device, model, status, out) + (contributions,)
+
+
+def _outputs(tb, n: int, L: int):
+    """The output arrays of the chain kernels: K, S, t, leg stiffness, leg wrench, energy, Hertz k, iterations."""
+    return (np.empty((n, 6, 6)), np.empty((n, 6, 6)), np.empty((n, 6)), np.empty((n, L, 6, 6)), np.empty((n, L, 6)),
+            np.empty((n, L, tb.n_elem)), np.full((n, L, tb.hp_joint.shape[1] + tb.ml_joint.shape[1]), np.nan), np.zeros(n, dtype=np.int64))
+
+
+def _finish(tb, device, model, status, out):
+    from femcheck.errors import ConvergenceError
     if status < 0:
         raise np.linalg.LinAlgError(f"leg or platform stiffness not positive definite at pose #{-status - 1}")
     if status:
         raise ConvergenceError("Hertz linearization fixed point of the parallel device did not converge "
                                f"at pose #{status - 1}", [], {"pose": int(status - 1)})
+    K, S, t, KL, WC, energy, kh, iters = out
     hertz = {}
     if model == "detailed":
-        for l in range(L):
+        for l in range(device.n_legs):
             for j, joint in enumerate(tb.hp_joint[l]):
                 if joint >= 0:
                     hertz[l, int(joint)] = kh[:, l, j]

@@ -81,7 +81,8 @@ def _build(device) -> DeviceTables:
     nhl = max(max(len(leg.hertz_line) for leg in legs), 1)
     nhp = max(max(len(leg.hertz_point) for leg in legs), 1)
     nlim = max(max(len(leg.limits) for leg in legs), 1)
-    i_n = np.zeros((L, 8), np.int64)     # n_dof, n_centres, n_links, n_hl, n_hp, n_lim, actuated, ik_kind
+    # n_dof, n_centres, n_links, n_hl, n_hp, n_lim, actuated, ik_kind, a limit on a passive freedom
+    i_n = np.zeros((L, 9), np.int64)
     dkind = np.zeros((L, nd), np.int64)  # 0 R, 1 P
     daxis = np.zeros((L, nd, 3))
     dpoint = np.zeros((L, nd, 3))
@@ -107,7 +108,7 @@ def _build(device) -> DeviceTables:
     for l, leg in enumerate(legs):
         ik[l] = _ik_kind(leg)
         i_n[l] = [leg.n_dof, len(leg.centres), len(leg.links), len(leg.hertz_line), len(leg.hertz_point),
-                  len(leg.limits), leg.actuated_dof, ik[l]]
+                  len(leg.limits), leg.actuated_dof, ik[l], any(d != leg.actuated_dof for d, _, _ in leg.limits)]
         for k in range(leg.n_dof):
             dkind[l, k] = 0 if leg.dof_kind[k] == "R" else 1
             passive[l, k] = int(k != leg.actuated_dof)
@@ -143,7 +144,8 @@ def _build(device) -> DeviceTables:
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
     ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint = _measured_law_tables(device)
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home, (ml_i, ml_S, ml_n, ml_F, ml_d))   # measured laws: keep them last (tab[-1])
+           f_leg, b_plat, kinds, R_home, np.asarray(device.tcp_offset, float).copy(),
+           (ml_i, ml_S, ml_n, ml_F, ml_d))   # measured laws: keep them last (tab[-1])
     return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik,
                         ml_joint=ml_joint)
 

@@ -142,6 +142,14 @@ def solve_leg(leg, R_home, R_target, C_target) -> LegState:
                     link_R=link_R, link_length=link_len)
 
 
+def as_poses(poses) -> np.ndarray:
+    """TCP poses as a C-contiguous float (n, 6) array [x, y, z, rx, ry, rz] (m, rad); ValueError otherwise."""
+    P = np.atleast_2d(np.asarray(poses, dtype=float))
+    if P.ndim != 2 or P.shape[1] != 6 or not np.all(np.isfinite(P)):
+        raise ValueError(f"poses: expected finite (n, 6) [x, y, z, rx, ry, rz] in m and rad, got shape {P.shape}")
+    return np.ascontiguousarray(P)
+
+
 def solve_legs(device, poses, backend: str = "compiled") -> DeviceState:
     """Inverse kinematics of every leg at TCP poses (n, 6) [x, y, z, rx, ry, rz] (m, rad).
 
@@ -150,9 +158,7 @@ def solve_legs(device, poses, backend: str = "compiled") -> DeviceState:
     """
     from femcheck.parallel.compiled import check_backend, solve_legs_compiled
     check_backend(backend)
-    P = np.atleast_2d(np.asarray(poses, dtype=float))
-    if P.ndim != 2 or P.shape[1] != 6 or not np.all(np.isfinite(P)):
-        raise ValueError(f"poses: expected finite (n, 6) [x, y, z, rx, ry, rz] in m and rad, got shape {P.shape}")
+    P = as_poses(poses)
     if backend == "compiled":
         return solve_legs_compiled(device, np.ascontiguousarray(P))
     R = rotvec_to_matrix(P[:, 3:])
