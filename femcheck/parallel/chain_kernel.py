@@ -1055,8 +1055,11 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                             A0[a, b] = acc
                     if not _chol(A0, Lf, m):
                         return -1 - p
-                    _chol_inverse(Lf, Mi[l], ev, xv, m)
-                    _sym_add(K, E[l], Mi[l], m, 1.0, xv)
+                    _chol_inverse(Lf, Mt, ev, xv, m)
+                    for a in range(m):
+                        for b in range(m):
+                            Mi[l, a, b] = Mt[a, b]
+                    _sym_add(K, E, Mi, l, m, 1.0, xv)
             for i in range(6):
                 for j in range(i + 1, 6):
                     K[j, i] = K[i, j]
