@@ -31,30 +31,26 @@ def clean(case):
 
 
 def test_projection_of_one_column_is_its_chi2(clean):
-    # a residual that is exactly one discrepancy column c |F| / sigma (group 0, axis x) projects onto itself:
-    # T = sum of its squares (the columns have disjoint supports)
-    group, w = discrepancy_basis(clean)
-    col = np.zeros_like(w)
-    col[group == 0, 0] = w[group == 0, 0]
-    resid = 3.0 * col
-    pred = clean.disp + resid * clean.sigma
-    lof = structured_lack_of_fit(clean, pred)
-    assert lof.chi2 == pytest.approx(float(np.sum(resid ** 2)), rel=1e-10)   # exact projection
+    # a residual that is exactly one discrepancy column (group 0, axis x: c |F| / sigma) projects onto itself:
+    # T = the sum of its squares (exact projection)
+    B = discrepancy_basis(clean, "case")
+    resid = 3.0 * B[:, :, 0] / clean.sigma
+    lof = structured_lack_of_fit(clean, clean.disp + resid * clean.sigma)
+    assert lof.chi2 == pytest.approx(float(np.sum(resid ** 2)), rel=1e-10)
     assert lof.n_columns == 3 * len(set(zip(clean.point, clean.direction)))   # 3 axes per (point, direction)
+    # the smooth space: 5 functions of the pose per direction and axis (9 poses, 3 directions: 45 columns)
+    sm = structured_lack_of_fit(clean, clean.disp + resid * clean.sigma, kind="smooth")
+    assert sm.n_columns == 3 * 3 * 5 and sm.chi2 <= lof.chi2 * (1 + 1e-12)   # a projection on a smaller space
 
 
 def test_the_fit_absorbs_exactly_the_columns_its_jacobian_spans(clean):
-    # a Jacobian equal to two discrepancy columns: tr(P_S H) = 2, so dof = m_S - 2 (hat-matrix trace, exact)
-    group, w = discrepancy_basis(clean)
-    a, b = np.zeros_like(w), np.zeros_like(w)
-    a[group == 1, 0] = w[group == 1, 0]          # group 1, axis x
-    b[group == 2, 2] = 5.0 * w[group == 2, 2]    # group 2, axis z (any scale)
-    J = np.column_stack([a.ravel(), b.ravel()])
+    # a Jacobian spanning two discrepancy columns: tr(P_S H) = 2, so dof = m_S - 2 (hat-matrix trace, exact)
+    B = discrepancy_basis(clean, "case") / clean.sigma[:, :, None]
+    J = np.column_stack([B[:, :, 3].ravel(), 5.0 * B[:, :, 7].ravel()])   # any scale
     lof = structured_lack_of_fit(clean, clean.disp, jacobian=J)
     assert lof.dof == pytest.approx(lof.n_columns - 2, abs=1e-9)
-    # a Jacobian orthogonal to every column (a load-independent offset on the 0 N unload states) absorbs nothing
-    J0 = np.zeros((w.size, 1))
-    J0[np.repeat(np.linalg.norm(clean.force, axis=1) == 0, 3), 0] = 1.0
+    # a Jacobian orthogonal to every column (an offset on the 0 N unload states) absorbs nothing
+    J0 = np.repeat(np.linalg.norm(clean.force, axis=1) == 0, 3).astype(float)[:, None]
     assert structured_lack_of_fit(clean, clean.disp, jacobian=J0).dof == pytest.approx(lof.n_columns, abs=1e-9)
 
 
@@ -63,9 +59,11 @@ def test_true_model_passes_and_pure_error_sees_the_quantization(case, model):
     # of the subspace over what the pooled sigma predicts) stays within a factor 2 of 1 (81 dof: +- 0.16 sd)
     for seed in range(4):
         r = process(simulate(case, [], seed=seed, directions=FAST).data, case)
-        lof = structured_lack_of_fit(r, fit_effects(model, r, []).predicted, sigma_dof=r.sigma_dof)
-        assert lof.p_value > 1e-3, (seed, lof)
-        assert 0.5 < lof.pure_error_ratio < 2.0 and lof.pure_error_dof == lof.n_columns   # 3 trials: 1 dof/column
+        pred = fit_effects(model, r, []).predicted
+        for kind in ("case", "smooth"):
+            lof = structured_lack_of_fit(r, pred, sigma_dof=r.sigma_dof, kind=kind)
+            assert lof.p_value > 1e-3, (seed, lof)
+            assert 0.5 < lof.pure_error_ratio < 2.0 and lof.pure_error_dof == lof.n_columns   # 3 trials: 1 dof/column
 
 
 def test_a_missing_compliance_is_a_structured_lack_of_fit(case, model):

@@ -213,7 +213,7 @@ def cross_validate(model, readings, effects, full: FitResult, folds) -> CrossVal
 
 def _lack_of_fit(readings, f: FitResult):
     return structured_lack_of_fit(readings, f.predicted, jacobian=f.jacobian, n_params=f.n_params,
-                                  sigma_dof=readings.sigma_dof)
+                                  sigma_dof=readings.sigma_dof, kind="both")
 
 
 def _explanation(f: FitResult) -> evidence.Explanation:
