@@ -102,3 +102,15 @@ def test_three_of_nine_points_keep_the_name_and_the_verdict(case, model):
                    ["P0", "P3", "P6"])
     j = _json(model, process(data, case))
     assert j["verdict"] == "explained" and j["causes"][0]["id"] == "actuation_compliance"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k,foreign", list(enumerate(FOREIGN)))
+def test_out_of_vocabulary_variants_are_unexplained(case, model, k, foreign):
+    # the bench's second variant of every foreign effect (magnitude 0.2, seed 4020 + k of
+    # `python -m femcheck.bench.hidden_effects --worlds foreign --foreign-magnitudes 0.05,0.1,0.2`): unexplained,
+    # whichever vocabulary causes stand in for it
+    r = process(simulate_foreign(case, foreign, 0.2, seed=4020 + k, directions=FAST).data, case)
+    d = diagnose(model, r, with_baseline=False)
+    assert d.verdict == "unexplained", (foreign, [c.id for c in d.causes], d.weighing.chi2_per_dof, d.lack_of_fit)
+    assert d.as_json()["residual"]["unexplained_fraction"] > 0.0 or foreign == "trial_creep"   # creep: drift finding
