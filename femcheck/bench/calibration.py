@@ -58,8 +58,9 @@ def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
     return out
 
 
-def one_set(seed: int) -> GeneratedSet:
-    """Generate, simulate and diagnose set ``seed`` (module docstring)."""
+def one_set(seed: int, pairs: bool = False) -> GeneratedSet:
+    """Generate, simulate and diagnose set ``seed`` (module docstring); ``pairs``: draw the hidden explanation from the
+    diagnosis's size prior (none, single, pair 1/3 each) instead of none or one effect with equal chances."""
     import dataclasses as dc
 
     import femcheck
@@ -73,9 +74,15 @@ def one_set(seed: int) -> GeneratedSet:
     model = AnalyticalChainModel(case, "detailed", "rigid")
     rng = np.random.default_rng(10_000 + seed)
     pool = [e for e in VOCABULARY if e != "none" and get_effect(e).applicable(model)]
-    pick = int(rng.integers(len(pool) + 1))
+    if pairs:
+        # the diagnosis's own prior (evidence.size_prior): none, a single, a pair with 1/3 each, uniform within
+        size = int(rng.integers(3))
+        picks = [] if size == 0 else sorted(rng.choice(len(pool), size=size, replace=False).tolist())
+    else:
+        pick = int(rng.integers(len(pool) + 1))
+        picks = [] if pick == len(pool) else [pick]
     shrink = float(rng.uniform(0.03, 0.6))
-    hidden = [] if pick == len(pool) else [(pool[pick], shrunk_truth(get_effect(pool[pick]), model, rng, case, shrink))]
+    hidden = [(pool[i], shrunk_truth(get_effect(pool[i]), model, rng, case, shrink)) for i in picks]
     points = tuple(sorted(rng.choice(POINT_LABELS, size=int(rng.integers(2, 5)), replace=False).tolist()))
     directions = tuple(rng.choice(AXES, size=int(rng.integers(1, 4)), replace=False).tolist())
     ve = simulate(case, hidden, seed=seed, directions=directions, sweep=False)
@@ -106,7 +113,11 @@ def reliability(predicted, right, bins=BINS) -> dict:
     return {"bins": rows, "ece": ece, "brier": float(np.mean((p - y) ** 2)) if len(p) else float("nan"), "n": int(len(p))}
 
 
-def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0) -> dict:
+def _one_set_pairs(seed: int) -> GeneratedSet:
+    return one_set(seed, pairs=True)
+
+
+def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False) -> dict:
     """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
     tables, the sets and the wall time."""
     t0 = time.perf_counter()
@@ -114,9 +125,9 @@ def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0) -> dict:
     if jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
         with ProcessPoolExecutor(jobs) as ex:
-            sets = list(ex.map(one_set, seeds))
+            sets = list(ex.map(_one_set_pairs if pairs else one_set, seeds))
     else:
-        sets = [one_set(s) for s in seeds]
+        sets = [one_set(s, pairs) for s in seeds]
     ep, er, cp, cr, top_p, top_r = [], [], [], [], [], []
     for s in sets:
         truth = tuple(sorted(s.hidden))
@@ -168,13 +179,18 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="reports/diagnose/calibration.md")
+    ap.add_argument("--pairs", action="store_true", help="hide none, one or two effects with the diagnosis's size prior "
+                    "(1/3 each) instead of none or one effect")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
-    res = calibration(a.sets, a.jobs, a.seed)
-    cmd = f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed}"
+    res = calibration(a.sets, a.jobs, a.seed, a.pairs)
+    cmd = f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed}" + (" --pairs" if a.pairs else "")
     text = markdown(res, cmd)
     from femcheck.report.atomic import write_text_atomic
     write_text_atomic(a.out, text + "\n")
+    import json
+    write_text_atomic(a.out.rsplit(".", 1)[0] + ".json", json.dumps(
+        [dataclasses.asdict(st) for st in res["sets"]], indent=0, default=float))
     print(text)
     print(f"wrote {a.out}")
     return 0

@@ -144,6 +144,10 @@ class WorldCase:
     verdict: str
     right: bool
     seconds: float
+    #: goodness of fit of the named explanation: overall chi^2 / dof and p, and the structured lack-of-fit p
+    chi2_per_dof: float = float("nan")
+    p_value: float = float("nan")
+    lack_of_fit_p_value: float = float("nan")
 
 
 def run_world_case(case, world: str, hidden: str, seed: int, directions=("+x", "+y", "+z")) -> WorldCase:
@@ -153,8 +157,8 @@ def run_world_case(case, world: str, hidden: str, seed: int, directions=("+x", "
       noise), diagnosed against the same model level: the first named cause is the hidden one (``none``: nothing
       named);
     * ``noise_6um``: the same with 6 um reading noise (twice the case's);
-    * ``foreign``: an out-of-vocabulary effect (:mod:`femcheck.experiment.foreign`, magnitude 0.1) on the analytical
-      model: the verdict is ``unexplained``;
+    * ``foreign``: an out-of-vocabulary effect (:mod:`femcheck.experiment.foreign`; ``hidden`` = ``name@magnitude``,
+      magnitude 0.1 when not given) on the analytical model: the verdict is ``unexplained``;
     * ``fe_released``: the device FE with frictional contact joints (``--model fe``) as the world, with one of
       :data:`FE_HIDDEN` on top, diagnosed against the analytical detailed model with ``released`` joints (its closest
       analytical idealization): the hidden cause is named (first or second; the FE's own secant Hertz law against
@@ -176,7 +180,8 @@ def run_world_case(case, world: str, hidden: str, seed: int, directions=("+x", "
     elif world == "foreign":
         from femcheck.experiment.foreign import simulate_foreign
         model = AnalyticalChainModel(case, "detailed", "rigid")
-        ve = simulate_foreign(case, hidden, 0.1, seed=seed, directions=directions)
+        name, _, mag = hidden.partition("@")       # "base_rocking@0.2": effect and magnitude (default 0.1)
+        ve = simulate_foreign(case, name, float(mag or 0.1), seed=seed, directions=directions)
     elif world in ("fe_released", "fe_simplified"):
         if _FE_MODEL is None:
             raise RuntimeError("the FE worlds need set_fe_world() first")
@@ -197,7 +202,9 @@ def run_world_case(case, world: str, hidden: str, seed: int, directions=("+x", "
         right = set(named) <= {"none", "hertz_stiffening"} if hidden == "none" else hidden in named
     else:
         right = named[:1] == ("missing_compliance",)
-    return WorldCase(world, hidden, seed, named, d.verdict, bool(right), time.perf_counter() - t)
+    lof = d.lack_of_fit
+    return WorldCase(world, hidden, seed, named, d.verdict, bool(right), time.perf_counter() - t,
+                     d.weighing.chi2_per_dof, d.weighing.p_value, lof.p_value if lof is not None else float("nan"))
 
 
 def set_fe_world(case, mesh: str = "coarse", parts: str = "solid"):
@@ -210,14 +217,15 @@ def set_fe_world(case, mesh: str = "coarse", parts: str = "solid"):
     return _FE_MODEL
 
 
-def world_tasks(seeds: int = 1) -> list[tuple[str, str, int]]:
+def world_tasks(seeds: int = 1, magnitudes=(0.1,)) -> list[tuple[str, str, int]]:
     """(world, hidden, seed) of every dataset: each vocabulary id per seed in the analytical worlds, each foreign
-    effect, each FE-world hidden effect, and the FE storyline."""
+    effect at each of ``magnitudes`` (hidden ``name@magnitude``), each FE-world hidden effect, and the FE storyline."""
     from femcheck.experiment.foreign import FOREIGN
     out = []
     for s in range(seeds):
         out += [(w, h, 3000 + 100 * s + VOCABULARY.index(h)) for w in ("same_model", "noise_6um") for h in VOCABULARY]
-        out += [("foreign", f, 4000 + 100 * s + k) for k, f in enumerate(FOREIGN)]
+        out += [("foreign", f"{f}@{m:g}", 4000 + 100 * s + 10 * j + k) for j, m in enumerate(magnitudes)
+                for k, f in enumerate(FOREIGN)]
         out += [("fe_released", h, 5000 + 100 * s + k) for k, h in enumerate(FE_HIDDEN)]
         out.append(("fe_simplified", "none", 6000 + s))
     return out
@@ -227,8 +235,9 @@ def _run_world(task):
     from femcheck.case import load_case
     w, h, seed = task
     r = run_world_case(load_case(CASE_PATH), w, h, seed)
-    log.info("%s %s seed %d -> %s, %s (%s, %.1f s)", w, h, seed, "+".join(r.named), r.verdict,
-             "right" if r.right else "WRONG", r.seconds)
+    log.info("%s %s seed %d -> %s, %s (%s, %.1f s; chi2/dof %.2f p %.2g, lack of fit p %.2g)", w, h, seed,
+             "+".join(r.named), r.verdict, "right" if r.right else "WRONG", r.seconds, r.chi2_per_dof, r.p_value,
+             r.lack_of_fit_p_value)
     return r
 
 
@@ -252,10 +261,11 @@ def world_markdown(results: list[WorldCase]) -> str:
     return "\n".join(lines)
 
 
-def run_worlds(seeds: int = 1, jobs: int = 1, mesh: str = "coarse", parts: str = "solid", worlds=WORLDS):
+def run_worlds(seeds: int = 1, jobs: int = 1, mesh: str = "coarse", parts: str = "solid", worlds=WORLDS,
+               magnitudes=(0.1,)):
     """Every dataset of :func:`world_tasks` in ``worlds`` (the FE model is built once, before the workers fork)."""
     from femcheck.case import load_case
-    tasks = [t for t in world_tasks(seeds) if t[0] in worlds]
+    tasks = [t for t in world_tasks(seeds, magnitudes) if t[0] in worlds]
     if any(t[0].startswith("fe_") for t in tasks):
         set_fe_world(load_case(CASE_PATH), mesh, parts)
     if jobs > 1:
@@ -276,6 +286,7 @@ def main(argv=None) -> int:
                     f"{', '.join(WORLDS)}, or 'all'), --seeds sets per hidden effect")
     ap.add_argument("--mesh", default="coarse", help="FE worlds: mesh level")
     ap.add_argument("--parts", default="solid", help="FE worlds: solid | beam parts")
+    ap.add_argument("--foreign-magnitudes", default="0.1", help="foreign world: comma list of magnitudes per effect")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     logging.getLogger("femcheck.diagnose.selection").setLevel(logging.WARNING)
@@ -283,11 +294,13 @@ def main(argv=None) -> int:
     t = time.perf_counter()
     if a.worlds:
         worlds = WORLDS if a.worlds == "all" else tuple(a.worlds.split(","))
-        res = run_worlds(a.seeds, a.jobs, a.mesh, a.parts, worlds)
+        mags = tuple(float(m) for m in a.foreign_magnitudes.split(","))
+        res = run_worlds(a.seeds, a.jobs, a.mesh, a.parts, worlds, mags)
         md = (f"# Diagnosis on data inside and outside the fitted model family ({len(res)} sets)\n\n"
               + world_markdown(res) + f"\nWall time {time.perf_counter() - t:.0f} s with {a.jobs} process(es); mean "
               f"diagnosis {np.mean([r.seconds for r in res]):.1f} s. Generated by `python -m femcheck.bench.hidden_effects "
-              f"--worlds {a.worlds} --seeds {a.seeds} --jobs {a.jobs} --mesh {a.mesh} --parts {a.parts}`.\n")
+              f"--worlds {a.worlds} --seeds {a.seeds} --jobs {a.jobs} --mesh {a.mesh} --parts {a.parts} "
+              f"--foreign-magnitudes {a.foreign_magnitudes}`.\n")
         from femcheck.report.atomic import write_text_atomic
         write_text_atomic(a.out, md)
         write_text_atomic(a.out.rsplit(".", 1)[0] + ".json", json.dumps([dataclasses.asdict(r) for r in res], indent=1,

@@ -47,6 +47,9 @@ class FitResult:
     predicted: np.ndarray
     nfev: int = 0
     on_bound: tuple[str, ...] = ()
+    #: (N, k_free) Jacobian of the weighted residual vector at the optimum over the fitted states (scaled
+    #: coordinates; the parameters off their bounds), for hat-matrix traces (``femcheck.diagnose.lack_of_fit``)
+    jacobian: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def penalty(self) -> float:
@@ -174,4 +177,5 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
     for w in warnings:
         log.info("fit %s: %s", "+".join(e.id for e in effects), w)
     return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
-                     chi2, n_data, k, tuple(warnings), pred, nfev, on_bound)
+                     chi2, n_data, k, tuple(warnings), pred, nfev, on_bound,
+                     jacobian=np.asarray(J)[:, free] if mask.all() else None)

@@ -27,6 +27,7 @@ import logging
 import numpy as np
 
 from femcheck.diagnose import evidence, residuals
+from femcheck.diagnose.lack_of_fit import structured_lack_of_fit
 from femcheck.diagnose.effects import effects as effect_registry
 from femcheck.diagnose.fitting import FitResult, fit_effects
 from femcheck.diagnose.placement import screen_placements
@@ -91,6 +92,8 @@ class Diagnosis:
     weighing: object = dataclasses.field(default=None, repr=False)
     #: screened placements of the located effects that joined the candidates (``femcheck.diagnose.placement``)
     placements: tuple = ()
+    #: structured lack of fit of the named explanation (``femcheck.diagnose.lack_of_fit.LackOfFit``)
+    lack_of_fit: object = None
 
     @property
     def verdict(self) -> str:
@@ -110,7 +113,8 @@ class Diagnosis:
                 "chi2_share_by_direction": share(np.asarray(r.direction)),
                 "chi2_share_by_phase": share(np.asarray(r.phase)),
                 "trial_drift_m_per_trial": float(r.trial_drift_m), "trial_drift_z": self.drift_z,
-                "reading_quantum_m": float(r.quantum_m), "shape": self.residual_shape()}
+                "reading_quantum_m": float(r.quantum_m), "shape": self.residual_shape(),
+                **(self.lack_of_fit.as_dict() if self.lack_of_fit is not None else {})}
 
     def residual_shape(self) -> dict:
         """What the remaining residual looks like. Along each loaded state's force direction u the residual
@@ -205,6 +209,11 @@ def cross_validate(model, readings, effects, full: FitResult, folds) -> CrossVal
     err = residuals.case_errors(readings, delta)
     return CrossValidation(delta=delta, states=states, chi2=chi2, error=residuals.mean_by_axis(readings, err["vector"]),
                            error_along=residuals.mean_by_axis(readings, err["along"]))
+
+
+def _lack_of_fit(readings, f: FitResult):
+    return structured_lack_of_fit(readings, f.predicted, jacobian=f.jacobian, n_params=f.n_params,
+                                  sigma_dof=readings.sigma_dof, kind="both")
 
 
 def _explanation(f: FitResult) -> evidence.Explanation:
@@ -317,6 +326,20 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
         greedy_ids = tuple(e.id for e in chosen)
         w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
+    # structured lack of fit (femcheck.diagnose.lack_of_fit): a compliance-shaped residual that the overall chi^2
+    # spreads over all readings. The verdict turns unexplained only when the named explanation *and* the best
+    # explanation of the vocabulary (the evidence leader) both leave one: an effect below the held-out selection's
+    # detection limit that a vocabulary cause would fit is not "unexplained"
+    lof = _lack_of_fit(readings, cur_fit)
+    if lof.p_value < evidence.ALPHA and w.verdict != "unexplained":
+        lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1].payload
+        lof_lead = lof if lead is cur_fit else _lack_of_fit(readings, lead)
+        if lof_lead.p_value < evidence.ALPHA:
+            excess_none = _lack_of_fit(readings, base)
+            frac = (lof.chi2 - lof.dof * lof.pure_error_ratio) / max(excess_none.chi2 - excess_none.dof
+                                                                       * excess_none.pure_error_ratio, 1e-12)
+            w = dataclasses.replace(w, verdict="unexplained",
+                                    unexplained_fraction=max(w.unexplained_fraction, float(np.clip(frac, 0.0, 1.0))))
     if w.verdict == "explained" and cur_fit.on_bound:
         # a cause that needs a parameter on its bound stands in for something the vocabulary cannot express
         w = dataclasses.replace(w, verdict="unexplained")
@@ -346,4 +369,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     return Diagnosis(model_name=model.name, causes=causes, significant=bool(chosen), base=base, fit=cur_fit,
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
-                     readings=readings, weighing=w, placements=tuple(placements))
+                     readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof)

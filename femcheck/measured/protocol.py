@@ -79,6 +79,12 @@ class Readings:
     trial_drift_m: float = 0.0
     trial_drift_sigma_m: float = 0.0
     sigma_dof: int = 0
+    #: the raw readings behind the means (r rows): ``row_state`` (r,) state index, ``row_trial`` (r,) trial
+    #: number, ``row_disp`` (r, 3) m reading; for pure-error estimates in a subspace
+    #: (:mod:`femcheck.diagnose.lack_of_fit`); None when the readings were built without them
+    row_state: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
+    row_trial: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
+    row_disp: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def n_states(self) -> int:
@@ -251,7 +257,8 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         test_N=np.array(c_pt, float), delta=np.array(c_delta).reshape(-1, 3), delta_sigma=np.array(c_dsig).reshape(-1, 3),
         preload_state=np.array(c_ps, int), total_state=np.array(c_ts, int),
         reading_sigma_m=sigma_r, resolution_m=res, quantum_m=float(quantum), trial_drift_m=drift,
-        trial_drift_sigma_m=drift_sd, sigma_dof=int(n_scatter) if pooled >= quantum ** 2 / 12.0 else 0)
+        trial_drift_sigma_m=drift_sd, sigma_dof=int(n_scatter) if pooled >= quantum ** 2 / 12.0 else 0,
+        row_state=idx, row_trial=np.asarray(data.trial, int), row_disp=np.asarray(data.disp, float))
 
 
 @dataclasses.dataclass(frozen=True)
