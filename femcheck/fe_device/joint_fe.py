@@ -156,7 +156,8 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
         if mesh_options is None:
             ms = joint_mesh_sizes(case, joint, mesh, max_load_N)
             size = ms.bulk_m
-            mesh_options = {"contact_warp": ms.contact_warp, "contact_size_m": ms.contact_m} if ms.contact_warp else {}
+            mesh_options = ({"contact_warp": ms.contact_warp, "contact_size_m": ms.surface_m, "axial_size_m": ms.axial_m,
+                             "hub_levels": ms.hub_levels} if ms.contact_warp else {})
         pm = universal_joint.build(case, size, **mesh_options)
         mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
         mu = case.solid.universal_joint.friction if friction is None else friction
