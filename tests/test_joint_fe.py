@@ -368,8 +368,8 @@ def test_universal_joint_mesh_convergence_within_3_percent(case):
     """Issue 14 target for the pins in their bores: every compliance component within 3 % over the graded
     coarse, default and fine levels, which refine the contact zone (nodes crowded at the loaded lines,
     warp 0.5 / 0.75 / 0.875) and the bulk (element length along the pins and through the yoke arms 2, 1.4,
-    1 mm; hub ends exact at every level). Measured spread ≤ 2.72 % (θ_x, θ_z; docs/joint_fe.md); the three
-    check-joints runs took 13.6 min wall at load average 7–8, 6.3 GB at the fine level."""
+    1 mm; hub ends exact at every level). Measured spread ≤ 2.72 % (θ_x, θ_z; docs/joint_fe.md; the three
+    check-joints runs took 13.6 min wall at load average 7–8; this test 6.0 min, 6.8 GB peak)."""
     from femcheck.fe_device.mesh_levels import joint_mesh_sizes
     axial = [joint_mesh_sizes(case, "universal", lv).axial_m for lv in ("coarse", "default", "fine")]
     assert axial[0] > axial[1] > axial[2]  # the levels refine the bulk, not only the contact zone
