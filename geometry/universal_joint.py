@@ -39,11 +39,15 @@ from geometry.structured import (circle, extrude, graded_levels, levels_with_zon
 PART = "universal_joint"
 
 
-def parameters(case, size: float | None = None, *, contact_warp: float = 0.0, contact_size_m: float | None = None) -> dict:
+def parameters(case, size: float | None = None, *, contact_warp: float = 0.0, contact_size_m: float | None = None,
+               axial_size_m: float | None = None, hub_levels: bool = False) -> dict:
     """Mesh parameters (the cache key). ``contact_warp`` A in [0, 1): the angles around pins and bores are
     φ + (A/2) sin 2φ of a uniform φ (0 = uniform), so the spacing is 1 − A times the uniform one at the
     top and bottom lines (where a pin bears) and 1 + A at the sides; ``contact_size_m`` overrides the
-    radial (through the surface) contact edge size / contact_refinement. The joint-FE levels
+    radial (through the surface) contact edge size / contact_refinement; ``axial_size_m`` overrides the
+    element length along the pins (whole pin) and through the arm thickness (default: ``size``);
+    ``hub_levels`` makes the hub ends (±hub_half_length_m along each pin) element levels, so the rigid hub
+    tie covers exactly that length at every size (else the facets whose centroid lies within it). The joint-FE levels
     (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`) use both; the defaults keep the mesh."""
     uj, so, me = case.universal_joint, case.solid.universal_joint, case.solid.mesh
     return {"pin_radius_m": uj.pin_radius_m, "contact_length_m": uj.contact_length_m, "pin_span_m": uj.pin_span_m,
@@ -53,14 +57,17 @@ def parameters(case, size: float | None = None, *, contact_warp: float = 0.0, co
             "size_m": float(size or me.universal_joint_size_m), "contact_refinement": me.contact_refinement,
             "grading": me.grading, "refinement": me.refinement,
             **({} if not contact_warp else {"contact_warp": float(contact_warp)}),
-            **({} if contact_size_m is None else {"contact_size_m": float(contact_size_m)})}
+            **({} if contact_size_m is None else {"contact_size_m": float(contact_size_m)}),
+            **({} if axial_size_m is None else {"axial_size_m": float(axial_size_m)}),
+            **({} if not hub_levels else {"hub_levels": True})}
 
 
 def build(case, size: float | None = None, *, use_cache: bool = True, contact_warp: float = 0.0,
-          contact_size_m: float | None = None) -> PartMesh:
+          contact_size_m: float | None = None, axial_size_m: float | None = None, hub_levels: bool = False) -> PartMesh:
     """Mesh of cross pins and yoke arms (see module doc). size: edge length away from the contacts, m;
-    contact_warp, contact_size_m: :func:`parameters`."""
-    p = parameters(case, size, contact_warp=contact_warp, contact_size_m=contact_size_m)
+    contact_warp, contact_size_m, axial_size_m, hub_levels: :func:`parameters`."""
+    p = parameters(case, size, contact_warp=contact_warp, contact_size_m=contact_size_m,
+                   axial_size_m=axial_size_m, hub_levels=hub_levels)
     return cached_build(PART, p, lambda: mesh(p), use_cache)
 
 
@@ -72,9 +79,10 @@ def warped_circle(r: float, A: float):
     return lambda ph: circle(r)(ph + 0.5 * A * np.sin(2.0 * ph))
 
 
-def _pin(r, length, h, h_c, g, zones, A=0.0, h_r=None):
+def _pin(r, length, h, h_c, g, zones, A=0.0, h_r=None, h_ax=None):
     """Pin along the local extrusion axis t in [-length/2, length/2]: points in (section x, section y, t).
-    h_r: the radial size at the surface (default h_c); A: angular warp (:func:`warped_circle`)."""
+    h_r: the radial size at the surface (default h_c); A: angular warp (:func:`warped_circle`); h_ax: the
+    element length along the axis (default h); zones: intervals whose ends are levels."""
     n = n_around(r, h_c)
     h_r = h_c if h_r is None else h_r
     depth = graded_levels(0.0, r, h_r, min(h, h_r + g * r), h)  # from the surface inward
@@ -82,14 +90,16 @@ def _pin(r, length, h, h_c, g, zones, A=0.0, h_r=None):
     counts = [1] + [max(6, math.ceil(n * rj / r)) for rj in radii[1:]]
     counts[-1] = n
     pts2, tris, _ = ring_section(None, warped_circle(r, A), radii / r, counts)
-    lv = levels_with_zones(-length / 2, length / 2, zones, h, h, g)
+    h_ax = h if h_ax is None else h_ax
+    lv = levels_with_zones(-length / 2, length / 2, zones, h_ax, h_ax, g)
     return extrude(pts2, tris, (lv - lv[0]) / (lv[-1] - lv[0]), -length / 2, length / 2)
 
 
-def _arm(rb, y0, y1, z0, z1, x0, x1, h, h_c, g, A=0.0, h_r=None):
+def _arm(rb, y0, y1, z0, z1, x0, x1, h, h_c, g, A=0.0, h_r=None, h_ax=None):
     """Arm with a bore (radius rb, centred at the section origin) through the thickness x0..x1; the section
     outline is the rectangle [y0, y1] x [z0, z1] (section coordinates). h_r: radial size at the bore
-    (default h_c); A: angular warp of the bore nodes (:func:`warped_circle`), blended out to the outline."""
+    (default h_c); A: angular warp of the bore nodes (:func:`warped_circle`), blended out to the outline;
+    h_ax: the element length through the thickness (default h, at least 3 layers)."""
     outline, corners = rectangle(y0, y1, z0, z1)
     n = n_around(rb, h_c)
     h_r = h_c if h_r is None else h_r
@@ -100,7 +110,7 @@ def _arm(rb, y0, y1, z0, z1, x0, x1, h, h_c, g, A=0.0, h_r=None):
     k_far = max(len(dist) - 1, math.ceil((far - rb) / h))
     t = np.interp(np.linspace(0, len(dist) - 1, k_far + 1), np.arange(len(dist)), dist / (near - rb))
     pts2, tris, _ = ring_section(warped_circle(rb, A), outline, t, [n] * len(t), extra_angles=corners)
-    nx = max(3, math.ceil((x1 - x0) / h))
+    nx = max(3, math.ceil((x1 - x0) / h) if h_ax is None else math.ceil((x1 - x0) / h_ax - 1e-9))
     return extrude(pts2, tris, np.linspace(0, 1, nx + 1), x0, x1)
 
 
@@ -121,8 +131,10 @@ def mesh(p: dict) -> PartMesh:
     delta = c if p["pin_position"] == "bottom" else 0.0
     Lp = Lu + l
     zones = [(-Lu / 2 - l / 2, -Lu / 2 + l / 2), (Lu / 2 - l / 2, Lu / 2 + l / 2)]
-    A, h_r = p.get("contact_warp", 0.0), p.get("contact_size_m", h_c)
-    sp, st = _pin(r, Lp, h, h_c, g, zones, A, h_r)
+    if p.get("hub_levels"):
+        zones.append((-hub, hub))
+    A, h_r, h_ax = p.get("contact_warp", 0.0), p.get("contact_size_m", h_c), p.get("axial_size_m")
+    sp, st = _pin(r, Lp, h, h_c, g, zones, A, h_r, h_ax)
     pin_vol = math.pi * r**2 * Lp
     bodies = []
 
@@ -136,9 +148,9 @@ def mesh(p: dict) -> PartMesh:
     arm_vol = l * (w * (w + H) - math.pi * rb**2)
     for sign, tag in ((-1, "m"), (1, "p")):
         xc = sign * Lu / 2
-        ap, at = _arm(rb, -w / 2, w / 2, -w / 2, w / 2 + H, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r)
+        ap, at = _arm(rb, -w / 2, w / 2, -w / 2, w / 2 + H, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r, h_ax)
         place(f"yoke_platform_{tag}", p["bore_material"], arm_vol, ap, at, [2, 0, 1], [0, 0, 0])
-        ap, at = _arm(rb, -w / 2, w / 2, -w / 2 - H, w / 2, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r)
+        ap, at = _arm(rb, -w / 2, w / 2, -w / 2 - H, w / 2, xc - l / 2, xc + l / 2, h, h_c, g, A, h_r, h_ax)
         place(f"yoke_link_{tag}", p["bore_material"], arm_vol, ap, at, [0, 2, 1], [0, 0, 0])
     z_top, z_bot = w / 2 + H, -w / 2 - H
 

@@ -76,6 +76,20 @@ def test_cache_round_trip(tmp_path, monkeypatch):
     assert back.cached and np.array_equal(back.stiffness, law.stiffness) and np.array_equal(back.approach_m, law.approach_m)
 
 
+def test_cache_key_follows_the_universal_mesh_levels(monkeypatch):
+    """A change of the universal joint's mesh levels (here its axial element length) changes the law's
+    cache key, so no stale law is reused; the other joint and level keep theirs."""
+    from femcheck.fe_device import joint_laws as jl
+    from femcheck.fe_device import mesh_levels
+    case = femcheck.load_case(CASE)
+    ladder = np.geomspace(0.5, 25.0, 7)
+    before = {(j, m): jl._cache_key(case, j, m, ladder) for j in ("universal", "spherical") for m in ("coarse", "fine")}
+    monkeypatch.setitem(mesh_levels.UNIVERSAL_AXIAL_FACTOR, "coarse", 1.7)
+    after = {k: jl._cache_key(case, *k, ladder) for k in before}
+    assert after[("universal", "coarse")] != before[("universal", "coarse")]
+    assert all(after[k] == before[k] for k in before if k != ("universal", "coarse"))
+
+
 @pytest.fixture(scope="module")
 def p0_model():
     from femcheck.verify.fe import run_fe

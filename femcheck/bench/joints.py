@@ -8,7 +8,8 @@ axial secant and each component compliance (m/N, rad/(N m)), its error against t
 and the spread of each component over the levels run (max − min over the finest level, %, target ≤ 3;
 ``<joint>_max_mesh_spread_pct`` the largest of them. Spherical levels are graded on the Hertz radius a
 (patch edge a / 3, a / 4.5, a / 6, bulk unchanged), universal levels on the loaded lines (angular warp
-0.5, 0.75, 0.875, bulk 2 mm) (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`); ``low_rank_updates`` counts the active-set
+0.5, 0.75, 0.875) and in the bulk (element length along the pins and through the yoke arms 2, 1.4, 1 mm,
+``<key>_axial_size_m``; in-plane bulk 2 mm) (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`); ``low_rank_updates`` counts the active-set
 changes solved by a Woodbury update of the last dense factorization instead of a new one.
 Targets (issue 14): universal ≤ 120 s and spherical ≤ 60 s at the default mesh on the 2-core machine.
 A level that fails records ``<joint>_<level>_error`` (the exception text) instead of numbers.
@@ -22,7 +23,7 @@ LEVELS = ("coarse", "default", "fine")
 
 
 #: levels per joint (both graded: the spherical fine level has 148 k DOFs, 3.5 GB; the universal fine level
-#: 430 k DOFs; docs/joint_fe.md)
+#: 426 k DOFs, ≈ 6 GB; docs/joint_fe.md)
 JOINT_LEVELS = {"spherical": LEVELS, "universal": LEVELS}
 
 
@@ -54,6 +55,8 @@ def run(joints=("spherical", "universal"), levels=None) -> dict:
             out[f"{key}_closed_points"] = r["closed_points"]
             out[f"{key}_contact_size_m"] = r["contact_size_m"]
             out[f"{key}_bulk_size_m"] = r["bulk_size_m"]
+            if r.get("axial_size_m") is not None:
+                out[f"{key}_axial_size_m"] = r["axial_size_m"]
             out[f"{key}_line_search_cuts"] = r["line_search_cuts"]
             out[f"{key}_stabilization_force_share"] = r["stabilization_force_share"]
             out[f"{key}_residual_rel"] = r["residual_rel"]

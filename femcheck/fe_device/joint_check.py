@@ -65,7 +65,8 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0") -> d
     Keys (contract, issue 14): converged, dofs, iterations, seconds, fe_compliance, analytical_compliance
     (6 x 6, SI), error_pct (per component, on ``fe_component_compliance``: each component with the other
     five held, as the per-component springs of the analytical model are defined); plus fe_tangent_stiffness, loads_N, factorizations, augmentations, free_dofs,
-    retained_dofs, condense_s, secant_axial_m_per_N, closed_points, mesh, point,
+    retained_dofs, condense_s, secant_axial_m_per_N, closed_points, mesh, point, contact_size_m, bulk_size_m,
+    axial_size_m (universal: element length along the pins and through the yoke arms; None for the ball),
     line_search_cuts, stabilized_iterations, stabilization_force_share (< 1e-6 required), residual_rel. A joint that does not
     converge raises :class:`femcheck.errors.ConvergenceError` (residual history, chattering points).
     """
@@ -95,6 +96,7 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0") -> d
             "free_dofs": r.free_dofs, "retained_dofs": r.retained, "iterations": r.iterations,
             "factorizations": r.factorizations + model.factorizations, "augmentations": r.augmentations,
             "low_rank_updates": r.low_rank_updates, "contact_size_m": ms.contact_m, "bulk_size_m": ms.bulk_m,
+            "axial_size_m": ms.axial_m,
             "hertz_contact_radius_m": ms.contact_radius_m,
             "seconds": r.seconds, "condense_s": r.condense_s, "loads_N": list(loads),
             "line_search_cuts": r.line_search_cuts, "stabilized_iterations": r.stabilized_iterations,

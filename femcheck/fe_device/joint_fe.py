@@ -35,10 +35,11 @@ ball surface (:func:`_exact_sphere_gap`: the straight facets' sagitta would open
 patch's Gauss points), the contact iterations start from the Hertz patch of the preload, and the stick
 tangent sticks the contact area (closed points and the points whose final gap is below 1e-3 of the
 approach increment). Changed active sets are solved by Woodbury updates of the last dense Cholesky
-(``low_rank_updates``). Universal joint: bulk at twice the case's size at every level, the nodes around
-pins and bores crowded at the loaded top/bottom lines by an angular warp (spacing 0.5, 0.25, 0.125 of the
-uniform one there), the same size through the surface; initial gaps between the exact cylinders
-(:func:`_exact_cylinder_gap`).
+(``low_rank_updates``). Universal joint: the nodes around pins and bores crowded at the loaded top/bottom
+lines by an angular warp (spacing 0.5, 0.25, 0.125 of the uniform one there) and the element length along
+the pins and through the yoke arms 2, 1.4, 1 x the case's size (the bulk), the hub ends element levels (the
+rigid hub ties exactly hub_half_length_m), in-plane bulk twice the case's size; initial gaps between the
+exact cylinders (:func:`_exact_cylinder_gap`).
 
 Compliances (SI: m/N, rad/(N m), m/(N m)):
 * secant along the joint axis for the eq. 1 increment: (u(F_20) − u(F_5)) / (F_20 − F_5);
@@ -156,7 +157,8 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
         if mesh_options is None:
             ms = joint_mesh_sizes(case, joint, mesh, max_load_N)
             size = ms.bulk_m
-            mesh_options = {"contact_warp": ms.contact_warp, "contact_size_m": ms.contact_m} if ms.contact_warp else {}
+            mesh_options = ({"contact_warp": ms.contact_warp, "contact_size_m": ms.surface_m, "axial_size_m": ms.axial_m,
+                             "hub_levels": ms.hub_levels} if ms.contact_warp else {})
         pm = universal_joint.build(case, size, **mesh_options)
         mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
         mu = case.solid.universal_joint.friction if friction is None else friction

@@ -27,7 +27,7 @@ from the ball-tilt contact FE, (3π/16) μ F a, μ F r_pin): the contact FE here
 load path and does not measure them.
 
 Measurements are cached on disk (``<mesh cache>/joint_laws/<key>.npz``, key = geometry, materials, friction,
-clearance, mesh level, ladder and the source of the joint FE code), so ``make verify`` and ``coverage`` do not
+clearance, mesh level and its element sizes, ladder and the source of the joint FE code), so ``make verify`` and ``coverage`` do not
 repeat them; a law mutation (``[model.law_scale]``) does not enter the key: it changes no joint FE input.
 """
 from __future__ import annotations
@@ -168,7 +168,11 @@ def _code_version() -> str:
 
 
 def _cache_key(case, joint: str, mesh: str, ladder: np.ndarray) -> str:
-    inputs = {"joint": joint, "mesh": mesh, "ladder": [float(f) for f in ladder], "code": _code_version(),
+    """Key of a measured law: the inputs of the joint FE, including the sizes of the mesh level (so a change
+    of the levels, e.g. the universal joint's axial refinement, never reuses a stale law)."""
+    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
+    sizes = repr(joint_mesh_sizes(case, joint, mesh, float(ladder[-1])))
+    inputs = {"joint": joint, "mesh": mesh, "ladder": [float(f) for f in ladder], "code": _code_version(), "mesh_sizes": sizes,
               "spherical_joint": repr(case.spherical_joint), "universal_joint": repr(case.universal_joint),
               "solid": repr(case.solid)}
     return hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:32]

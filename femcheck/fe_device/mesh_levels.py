@@ -42,10 +42,15 @@ JOINT_ZONE_PER_A = 1.3
 JOINT_GRADING = 0.5
 
 
-#: universal joint: graded levels (bulk at 2 x the case size, nodes crowded at the loaded lines by the
-#: angular warp A, spacing 1 − A of the uniform one there, and the same size through the surface)
+#: universal joint: graded levels. Every level refines both the contact zone and the bulk: the nodes around
+#: pins and bores crowd at the loaded lines by the angular warp A (spacing 1 − A of the uniform one there),
+#: and the element length along the pins and through the yoke arms (the pins' bending and their bearing
+#: along the bores) is UNIVERSAL_AXIAL_FACTOR x the case's universal_joint_size_m. The in-plane bulk edge
+#: is 2 x the case size and the radial edge through the contact surfaces the coarse level's arc, at every
+#: level; the hub ends are element levels at every level (the rigid hub ties exactly hub_half_length_m).
 UNIVERSAL_GRADED = True
 UNIVERSAL_WARP = {"coarse": 0.5, "default": 0.75, "fine": 0.875}
+UNIVERSAL_AXIAL_FACTOR = {"coarse": 2.0, "default": 1.4, "fine": 1.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,6 +67,11 @@ class JointMeshSizes:
     grading: float
     contact_radius_m: float | None
     contact_warp: float = 0.0
+    #: universal joint: element length along the pins and through the arms (m), radial edge through the
+    #: contact surfaces (m), hub ends as element levels
+    axial_m: float | None = None
+    surface_m: float | None = None
+    hub_levels: bool = False
 
 
 def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float | None = None) -> JointMeshSizes:
@@ -71,11 +81,15 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
     joint at P0, femcheck.fe_device.joint_check.joint_loads): contact edge a / 3, a / 4.5, a / 6 on a disc
     of radius 1.3 a, growing by 0.5 per unit distance from it; bulk = the case's spherical_joint_size_m at
     every level (so the fine level stays affordable; the level spread measures the contact zone).
-    universal (``UNIVERSAL_GRADED``): bulk = 2 x the case's universal_joint_size_m at every level, the
-    angles around pins and bores warped toward the loaded top/bottom lines (``contact_warp`` A = 0.5,
-    0.75, 0.875: spacing 1 − A of the uniform n_around one there), ``contact_m`` = that arc, also the
-    radial size at the surface; ``UNIVERSAL_GRADED = False``: the case's size times 2, 1, 0.5 everywhere
-    (the levels before the graded ones)."""
+    universal (``UNIVERSAL_GRADED``): the angles around pins and bores warped toward the loaded top/bottom
+    lines (``contact_warp`` A = 0.5, 0.75, 0.875: spacing 1 − A of the uniform n_around one there,
+    ``contact_m`` = that arc) and the element length along the pins and through the yoke arms
+    ``axial_m`` = 2, 1.4, 1 x the case's universal_joint_size_m (the bulk the levels refine: pin bending and
+    bearing along the bores); in-plane bulk ``bulk_m`` = 2 x the case size and radial edge through the
+    contact surfaces ``surface_m`` = the coarse arc at every level; the hub ends are element levels
+    (``hub_levels``: without them a 2 mm mesh tied the hub over 1.8 mm only, 6–7 % softer);
+    ``UNIVERSAL_GRADED = False``: the case's size times 2, 1, 0.5 everywhere (the levels before the
+    graded ones)."""
     if level not in _FACTOR or level == "finer":
         raise ValueError(f"mesh level = {level!r}; expected one of {', '.join(MESH_LEVELS)}")
     m = case.solid.mesh
@@ -94,7 +108,9 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
         size = _FACTOR["coarse"] * float(m.universal_joint_size_m)
         n = n_around(float(case.universal_joint.pin_radius_m), size / float(m.contact_refinement))
         A = UNIVERSAL_WARP[level]
-        arc = 2.0 * math.pi * float(case.universal_joint.pin_radius_m) / n * (1.0 - A)
-        return JointMeshSizes(level, size, arc, None, float(m.grading), None, A)
+        uniform_arc = 2.0 * math.pi * float(case.universal_joint.pin_radius_m) / n
+        return JointMeshSizes(level, size, uniform_arc * (1.0 - A), None, float(m.grading), None, A,
+                              axial_m=UNIVERSAL_AXIAL_FACTOR[level] * float(m.universal_joint_size_m),
+                              surface_m=uniform_arc * (1.0 - UNIVERSAL_WARP["coarse"]), hub_levels=True)
     size = _FACTOR[level] * float(m.universal_joint_size_m)
     return JointMeshSizes(level, size, size / float(m.contact_refinement), None, float(m.grading), None)
