@@ -55,6 +55,7 @@ def test_diagnose_refuses_to_write_over_its_input(data, capsys):
     assert "input file" in capsys.readouterr().err
 
 
+@pytest.mark.slow   # a second full diagnosis for the stdout path (CI budget); the JSON keys: test_diagnose_json_and_report
 def test_diagnose_json_to_stdout(data, capsys):
     d, csv = data
     assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--json", "-"]) == 0

@@ -90,6 +90,8 @@ def test_ball_tilt_contact_fe_moment_saturates_at_mu_f_r(case):
     assert np.all(np.diff(np.abs(f.moment_Nm)) > 0)  # proportional loading: the moment grows with F
 
 
+@pytest.mark.slow   # 36 s (CI budget); the analytical twin stays in the default suite:
+# test_diagnose_selection.py::test_released_joint_data_against_the_rigid_model
 def test_contact_fe_data_diagnosed_against_rigid_names_joint_rotation_release(case):
     """Issue 7 acceptance, FE-backed: readings from the detailed FE with contact joints (beam parts here for
     speed; `make verify` does the same with the solid parts) diagnosed against the paper's rigid model name
