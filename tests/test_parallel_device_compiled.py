@@ -108,8 +108,9 @@ def test_delta_closed_form_ik_matches_the_numeric_ik_to_rounding():
     against the compiled Gauss-Newton on random reachable poses of a 60 mm cube around P0 (wider than the test
     cube): the numeric IK stops at |e| < 1e-13 and the joint values follow with the leg's conditioning, so they
     agree to ~1e-12 (measured 1.3e-12 over 400 such poses) and K_T to ~1e-12 relative (measured 1.0e-12 rigid,
-    3.3e-12 released: the released wrench basis comes from the passive twists). A pose with a platform rotation, which the translational legs cannot follow, and poses out of reach
-    fall back to the numeric solution and are refused alike."""
+    3.3e-12 released: the released wrench basis comes from the passive twists). A pose with a platform rotation,
+    which the translational legs cannot follow, and poses out of reach fall back to the numeric solution and are
+    refused alike."""
     case = load_case(ROOT / "cases" / "delta_3ruu.toml")
     dev = case.device
     rng = np.random.default_rng(21)

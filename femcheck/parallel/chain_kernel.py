@@ -106,7 +106,8 @@ def _rot(w0, w1, w2, c, s, R):
     Machine-code note, for every helper the per-pose loops call: numba counts references to the array arguments
     of a function with atomic increments; they are pruned only in a function that calls no other compiled
     function (inlined or not; the math intrinsics are fine). Such a leaf costs nothing to call, a function that
-    calls others costs two atomic operations per array argument and call (~15 ns each). The helpers are leaves,
+    calls others costs two atomic operations per array argument and call (~5 to 10 ns each); ``x ** 2`` and
+    iterating over a tuple are calls too. The helpers are leaves,
     and the closed forms are written out in :func:`_ik_range`'s loop (as an inlined function taking tuples of
     work arrays they cost ~50 atomic operations per leg and pose, a third of the released model's time)."""
     v = 1.0 - c
@@ -284,7 +285,8 @@ def _sp2_z(w1, w2, p, qv, z):
                 d = 0.0
                 for i in range(3):
                     zi = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-                    d += (zi - p[i]) ** 2
+                    dz = zi - p[i]
+                    d += dz * dz   # (not ** 2: numba's integer power is a call, which keeps this from a leaf)
                 if d < best:
                     best = d
                     for i in range(3):
@@ -363,6 +365,19 @@ def _row(A, l, k, out):
 
 
 @njit(cache=True, error_model="numpy")
+def _slide_u_s(daxis, cen, l, k_p, k_u, m_s, m_u, a_u, a_1, a_2, c_S, c_U):
+    """The axes and centres the P-S-U / U-P-S closed forms read, copied (a leaf: element by element, no calls):
+    the slide a_u = daxis[l, k_p], the U axes a_1, a_2 = daxis[l, k_u], daxis[l, k_u + 1], the S and U centres
+    c_S = cen[l, m_s], c_U = cen[l, m_u]."""
+    for i in range(3):
+        a_u[i] = daxis[l, k_p, i]
+        a_1[i] = daxis[l, k_u, i]
+        a_2[i] = daxis[l, k_u + 1, i]
+        c_S[i] = cen[l, m_s, i]
+        c_U[i] = cen[l, m_u, i]
+
+
+@njit(cache=True, error_model="numpy")
 def _row2(A, k, out):
     """out (3,) = A[k] copied (no view)."""
     out[0], out[1], out[2] = A[k, 0], A[k, 1], A[k, 2]
@@ -374,78 +389,6 @@ def _rows3(A, l, k, out):
     for j in range(3):
         for i in range(3):
             out[j, i] = A[l, k + j, i]
-
-
-@njit(cache=True, error_model="numpy")
-def _closed_form_ruu(l, daxis, dpoint, cen, f_leg, R_t, C_t, R_home, q, e0, e1, e2, f1, f2, p3, t3, z3, ang, Rn, Ra,
-                     Rb, Rc):
-    """Joint values q[:5] of an ``R*-U-U`` leg (the Delta's crank, rod and platform U; ik_kind 3) by its closed
-    form; False where it has none (the caller then runs the forward pass and checks the whole end error, the
-    orientation included: a pose the leg's five freedoms cannot reach falls back to the numeric solution).
-
-    - crank q0: the elbow E(q0) = A + (v.a) a + cos q0 v_perp + sin q0 (a x v_perp) (v = E_0 - A) on the sphere
-      ``|C - E| = l`` (l = |C_0 - E_0|, the rod): ``alpha cos q0 + beta sin q0 = kappa`` with
-      ``alpha = 2 d.v_perp``, ``beta = 2 d.(a x v_perp)``, ``kappa = |d|^2 + |v_perp|^2 - l^2``,
-      ``d = C - A - (v.a) a``; ``q0 = atan2(beta, alpha) - sigma acos(kappa / rho)``, sigma the home branch;
-    - elbow U (q1, q2): subproblem 2, ``Rot(e1, q1) Rot(e2, q2) (C_0 - E_0) = Rot(a, -q0) (C - E)``;
-    - platform U (q3, q4): ``Rot(f1, q3) Rot(f2, q4) = (R_0 R_1 R_2)^T R_nd``, subproblem 1 on f2 (for q3), then
-      on f1 (for q4)."""
-    ok = False
-    _target_rotation(R_t, R_home, Rn)
-    _row(daxis, l, 0, e0)
-    _row(daxis, l, 1, e1)
-    _row(daxis, l, 2, e2)
-    _row(daxis, l, 3, f1)
-    _row(daxis, l, 4, f2)
-    a0, a1, a2 = dpoint[l, 0, 0], dpoint[l, 0, 1], dpoint[l, 0, 2]       # a point of the crank axis
-    v0, v1, v2 = cen[l, 1, 0] - a0, cen[l, 1, 1] - a1, cen[l, 1, 2] - a2
-    vw = e0[0] * v0 + e0[1] * v1 + e0[2] * v2
-    vp0, vp1, vp2 = v0 - vw * e0[0], v1 - vw * e0[1], v2 - vw * e0[2]
-    vx0 = e0[1] * vp2 - e0[2] * vp1
-    vx1 = e0[2] * vp0 - e0[0] * vp2
-    vx2 = e0[0] * vp1 - e0[1] * vp0
-    d0, d1, d2 = C_t[0] - a0 - vw * e0[0], C_t[1] - a1 - vw * e0[1], C_t[2] - a2 - vw * e0[2]
-    l2 = 0.0
-    for i in range(3):
-        p3[i] = cen[l, 2, i] - cen[l, 1, i]                                  # the rod at home, E_0 -> C_0
-        l2 += p3[i] * p3[i]
-    al = 2.0 * (d0 * vp0 + d1 * vp1 + d2 * vp2)
-    be = 2.0 * (d0 * vx0 + d1 * vx1 + d2 * vx2)
-    ka = d0 * d0 + d1 * d1 + d2 * d2 + vp0 * vp0 + vp1 * vp1 + vp2 * vp2 - l2
-    rho = np.sqrt(al * al + be * be)
-    if rho > 0.0 and abs(ka) <= rho:
-        q0 = np.arctan2(be, al) - f_leg[l, 1] * np.arccos(ka / rho)
-        if q0 > np.pi:
-            q0 -= 2.0 * np.pi
-        elif q0 <= -np.pi:
-            q0 += 2.0 * np.pi
-        c, s = np.cos(q0), np.sin(q0)
-        # C - E(q0), turned back by the crank
-        x0 = C_t[0] - (a0 + vw * e0[0] + c * vp0 + s * vx0)
-        x1 = C_t[1] - (a1 + vw * e0[1] + c * vp1 + s * vx1)
-        x2 = C_t[2] - (a2 + vw * e0[2] + c * vp2 + s * vx2)
-        _rot_back(e0, c, s, x0, x1, x2, t3)
-        if _sp2_z(e1, e2, p3, t3, z3):
-            ok = True
-            q[0] = q0
-            q[2] = _sp1(e2, p3, z3, ang, 4, True)
-            q[1] = _sp1(e1, z3, t3, ang, 2, True)
-            _rot(e0[0], e0[1], e0[2], c, s, Ra)
-            _rot(e1[0], e1[1], e1[2], ang[2], ang[3], Rb)
-            _mm3(Ra, Rb, Rc)
-            _rot(e2[0], e2[1], e2[2], ang[4], ang[5], Rb)
-            _mm3(Rc, Rb, Ra)                                                 # R_0 R_1 R_2
-            for i in range(3):
-                for j in range(3):
-                    Rc[i, j] = Ra[0, i] * Rn[0, j] + Ra[1, i] * Rn[1, j] + Ra[2, i] * Rn[2, j]   # what is left
-            for i in range(3):
-                t3[i] = Rc[i, 0] * f2[0] + Rc[i, 1] * f2[1] + Rc[i, 2] * f2[2]
-            q[3] = _sp1(f1, f2, t3, ang, 0, True)                            # Rot(f1, q3) f2 = R_rem f2
-            _rot_back(f1, ang[0], ang[1], Rc[0, 0] * f1[0] + Rc[0, 1] * f1[1] + Rc[0, 2] * f1[2],
-                      Rc[1, 0] * f1[0] + Rc[1, 1] * f1[1] + Rc[1, 2] * f1[2],
-                      Rc[2, 0] * f1[0] + Rc[2, 1] * f1[1] + Rc[2, 2] * f1[2], t3)
-            q[4] = _sp1(f2, f1, t3, ang, 2, True)                            # Rot(f2, q4) f1 = Rot(f1, -q3) R_rem f1
-    return ok
 
 
 # ---------------------------------------------------------------- inverse kinematics of every leg
@@ -490,6 +433,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
     Rn, Ra, Rb, Rs, A3, T3, Sx, I3 = (np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                                       np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
     a_u, a_1, a_2, c_S, c_U, Ct3 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    f_1, f_2 = np.zeros(3), np.zeros(3)
     S3, Rt3 = np.zeros((3, 3)), np.zeros((3, 3))
     I3[0, 0] = I3[1, 1] = I3[2, 2] = 1.0
     for l in range(L):
@@ -505,9 +449,75 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 for k in range(3):
                     Rt3[i, k] = R_t[p, i, k]
             if i_n[l, 7] == 3 and not numeric_only:
-                # R*-U-U: the closed form gives the joint values; the forward pass the rest and the end error
-                if _closed_form_ruu(l, daxis, dpoint, cen, f_leg, Rt3, Ct3, R_home, q, a_u, a_1, a_2, c_S, c_U, w3,
-                                    z3, v3, ang, Rn, Ra, Rb, Rs):
+                # R*-U-U, dofs [R, U1, U2, U3, U4] (the Delta's crank, rod and platform U): the joint values by the
+                # closed form, then the forward pass gives the rest and the end error, the orientation included (a
+                # pose the five freedoms cannot reach falls back to the numeric solution). Written out here, as the
+                # other closed forms, so that the loop calls only leaf helpers (see _rot).
+                # - crank q0: the elbow E(q0) = A + (v.a) a + cos q0 v_perp + sin q0 (a x v_perp) (v = E_0 - A, a the
+                #   crank axis a_u) on the sphere |C - E| = l (l = |C_0 - E_0|, the rod): alpha cos q0 + beta sin q0
+                #   = kappa, alpha = 2 d.v_perp, beta = 2 d.(a x v_perp), kappa = |d|^2 + |v_perp|^2 - l^2,
+                #   d = C - A - (v.a) a; q0 = atan2(beta, alpha) - sigma acos(kappa / rho), sigma the home branch;
+                # - elbow U (q1, q2, axes a_1, a_2): subproblem 2,
+                #   Rot(a_1, q1) Rot(a_2, q2) (C_0 - E_0) = Rot(a, -q0) (C - E);
+                # - platform U (q3, q4, axes f_1, f_2): Rot(f_1, q3) Rot(f_2, q4) = (R_0 R_1 R_2)^T R_nd, subproblem 1
+                #   on f_2 (for q3), then on f_1 (for q4).
+                ok3 = False
+                _target_rotation(Rt3, R_home, Rn)
+                _row(daxis, l, 0, a_u)
+                _row(daxis, l, 1, a_1)
+                _row(daxis, l, 2, a_2)
+                _row(daxis, l, 3, f_1)
+                _row(daxis, l, 4, f_2)
+                a0, a1, a2 = dpoint[l, 0, 0], dpoint[l, 0, 1], dpoint[l, 0, 2]       # a point of the crank axis
+                v0, v1, v2 = cen[l, 1, 0] - a0, cen[l, 1, 1] - a1, cen[l, 1, 2] - a2
+                vw = a_u[0] * v0 + a_u[1] * v1 + a_u[2] * v2
+                vp0, vp1, vp2 = v0 - vw * a_u[0], v1 - vw * a_u[1], v2 - vw * a_u[2]
+                vx0 = a_u[1] * vp2 - a_u[2] * vp1
+                vx1 = a_u[2] * vp0 - a_u[0] * vp2
+                vx2 = a_u[0] * vp1 - a_u[1] * vp0
+                d0, d1, d2 = Ct3[0] - a0 - vw * a_u[0], Ct3[1] - a1 - vw * a_u[1], Ct3[2] - a2 - vw * a_u[2]
+                l2 = 0.0
+                for i in range(3):
+                    w3[i] = cen[l, 2, i] - cen[l, 1, i]                                  # the rod at home, E_0 -> C_0
+                    l2 += w3[i] * w3[i]
+                al = 2.0 * (d0 * vp0 + d1 * vp1 + d2 * vp2)
+                be = 2.0 * (d0 * vx0 + d1 * vx1 + d2 * vx2)
+                ka = d0 * d0 + d1 * d1 + d2 * d2 + vp0 * vp0 + vp1 * vp1 + vp2 * vp2 - l2
+                rho = np.sqrt(al * al + be * be)
+                if rho > 0.0 and abs(ka) <= rho:
+                    q0 = np.arctan2(be, al) - f_leg[l, 1] * np.arccos(ka / rho)
+                    if q0 > np.pi:
+                        q0 -= 2.0 * np.pi
+                    elif q0 <= -np.pi:
+                        q0 += 2.0 * np.pi
+                    cq, sq = np.cos(q0), np.sin(q0)
+                    # C - E(q0), turned back by the crank
+                    x0 = Ct3[0] - (a0 + vw * a_u[0] + cq * vp0 + sq * vx0)
+                    x1 = Ct3[1] - (a1 + vw * a_u[1] + cq * vp1 + sq * vx1)
+                    x2 = Ct3[2] - (a2 + vw * a_u[2] + cq * vp2 + sq * vx2)
+                    _rot_back(a_u, cq, sq, x0, x1, x2, z3)
+                    if _sp2_z(a_1, a_2, w3, z3, v3):
+                        ok3 = True
+                        q[0] = q0
+                        q[2] = _sp1(a_2, w3, v3, ang, 4, True)
+                        q[1] = _sp1(a_1, v3, z3, ang, 2, True)
+                        _rot(a_u[0], a_u[1], a_u[2], cq, sq, Ra)
+                        _rot(a_1[0], a_1[1], a_1[2], ang[2], ang[3], Rb)
+                        _mm3(Ra, Rb, Rs)
+                        _rot(a_2[0], a_2[1], a_2[2], ang[4], ang[5], Rb)
+                        _mm3(Rs, Rb, Ra)                                                 # R_0 R_1 R_2
+                        for i in range(3):
+                            for j in range(3):
+                                # what is left for the platform U: R_rem = (R_0 R_1 R_2)^T R_nd
+                                Rs[i, j] = Ra[0, i] * Rn[0, j] + Ra[1, i] * Rn[1, j] + Ra[2, i] * Rn[2, j]
+                        for i in range(3):
+                            z3[i] = Rs[i, 0] * f_2[0] + Rs[i, 1] * f_2[1] + Rs[i, 2] * f_2[2]
+                        q[3] = _sp1(f_1, f_2, z3, ang, 0, True)   # Rot(f_1, q3) f_2 = R_rem f_2
+                        _rot_back(f_1, ang[0], ang[1], Rs[0, 0] * f_1[0] + Rs[0, 1] * f_1[1] + Rs[0, 2] * f_1[2],
+                                  Rs[1, 0] * f_1[0] + Rs[1, 1] * f_1[1] + Rs[1, 2] * f_1[2],
+                                  Rs[2, 0] * f_1[0] + Rs[2, 1] * f_1[1] + Rs[2, 2] * f_1[2], z3)
+                        q[4] = _sp1(f_2, f_1, z3, ang, 2, True)   # Rot(f_2, q4) f_1 = Rot(f_1, -q3) R_rem f_1
+                if ok3:
                     _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
                     res = _end_error(l, i_n, cen, Rp, tp, Rt3, Ct3, C, e, Rend, Rerr, R_home)
                     closed = res < TOL
@@ -519,11 +529,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 # Rot(a2, -q5) Rot(a1, -q4) d_home = R_nd^T d (subproblem 2); the S angles from what is left.
                 # Only what the outputs read unless ``full``; the passive angles only if ``want_q``.
                 _target_rotation(Rt3, R_home, Rn)
-                _row(daxis, l, 0, a_u)
-                _row(daxis, l, 4, a_1)
-                _row(daxis, l, 5, a_2)
-                _row(cen, l, 1, c_S)
-                _row(cen, l, 2, c_U)
+                _slide_u_s(daxis, cen, l, 0, 4, 1, 2, a_u, a_1, a_2, c_S, c_U)
                 b, rr, L2 = 0.0, 0.0, 0.0
                 for i in range(3):
                     ri = Ct3[i] - c_S[i]
@@ -569,11 +575,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 # U-P*-S: dofs [U1, U2, P, S1, S2, S3]. The strut length |C - c_U|; the U angles pointing the strut
                 # (subproblem 2); the S angles from what is left.
                 _target_rotation(Rt3, R_home, Rn)
-                _row(daxis, l, 2, a_u)
-                _row(daxis, l, 0, a_1)
-                _row(daxis, l, 1, a_2)
-                _row(cen, l, 0, c_U)
-                _row(cen, l, 1, c_S)
+                _slide_u_s(daxis, cen, l, 2, 0, 1, 0, a_u, a_1, a_2, c_S, c_U)
                 L0, Lw, sg = 0.0, 0.0, 0.0
                 for i in range(3):
                     z3[i] = c_S[i] - c_U[i]
@@ -596,7 +598,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                         _mm3(Ra, Rb, Sx)                                      # R_U
                         for i in range(3):
                             for j in range(3):
-                                Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]   # R_U^T R_nd
+                                # R_S = R_U^T R_nd
+                                Rs[i, j] = Sx[0, i] * Rn[0, j] + Sx[1, i] * Rn[1, j] + Sx[2, i] * Rn[2, j]
                         if want_q:
                             _rows3(daxis, l, 3, S3)
                             _cardan(S3, Rs, q, 3, A3, T3)
@@ -613,7 +616,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                             C[i] = Rb[i, 0] * w3[0] + Rb[i, 1] * w3[1] + Rb[i, 2] * w3[2] + c_U[i]
                         for i in range(3):
                             w3[i] = c_U[i] - a_u[i] * q[2]
-                        _set_transform(Rp, tp, 3, Rb, w3, c_U)                # after the slide: R_U (x + u q - c_U) + c_U
+                        # after the slide: R_U (x + u q - c_U) + c_U
+                        _set_transform(Rp, tp, 3, Rb, w3, c_U)
                         _set_transform(Rp, tp, 6, Rn, c_S, C)
                         _set_twist(tw, 2, Rb, a_u, C, C, False)
                         if full:

@@ -77,7 +77,7 @@ def _ik_kind(leg) -> int:
 
 def _ruu_home_branch(leg) -> float:
     """Sign sigma of the crank root ``q0 = atan2(beta, alpha) - sigma acos(kappa / rho)`` of an R*-U-U leg that is
-    the home configuration (q0 = 0; chain_kernel._closed_form_ruu): at home ``kappa = alpha``, so
+    the home configuration (q0 = 0; the R*-U-U closed form of chain_kernel._ik_range): at home ``kappa = alpha``, so
     ``acos(kappa / rho) = |atan2(beta, alpha)|`` and sigma is the sign of ``beta = 2 d . (a x v_perp)``."""
     a, A = leg.dof_axis[0], leg.dof_point[0]
     v = leg.centres[1] - A
