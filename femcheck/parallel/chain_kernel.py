@@ -105,9 +105,10 @@ def _rot(w0, w1, w2, c, s, R):
 
     Machine-code note, for every helper the per-pose loops call: numba counts references to the array arguments
     of a function with atomic increments; they are pruned only in a function that calls no other compiled
-    function (inlined or not; the math intrinsics are fine). Such a leaf costs nothing to call, a function that
-    calls others costs two atomic operations per array argument and call (~5 to 10 ns each); ``x ** 2`` and
-    iterating over a tuple are calls too. The helpers are leaves,
+    function (inlined or not). Such a leaf costs nothing to call, a function that calls others costs two atomic
+    operations per array argument and call (~5 to 10 ns each); ``x ** 2`` and iterating over a tuple are calls
+    too, and so, it seems, are some math intrinsics (:func:`_sp2_z`, with ``np.sqrt``, still counts). The helpers
+    are leaves,
     and the closed forms are written out in :func:`_ik_range`'s loop (as an inlined function taking tuples of
     work arrays they cost ~50 atomic operations per leg and pose, a third of the released model's time)."""
     v = 1.0 - c
