@@ -18,21 +18,24 @@ Inverse kinematics (:func:`ik_kernel`), per leg and pose:
   (``(J^T J) dq = J^T e``; ``J J^T`` for a redundant leg), limited to ``MAX_STEP`` as in numpy.
 
 The numeric solution ends with the forward pass (product of exponentials of the home screws) that gives the
-joint centres, the unit joint twists at C, the link frames and the residual. A closed form writes the same
-quantities from its angles directly and is checked by its own position residual (its orientation holds by
-construction); the tests hold it to the numeric solution.
+joint centres, the unit joint twists at C, the link frames and the residual. The P-S-U and U-P-S closed forms
+write the same quantities from their angles directly and are checked by their own position residual (their
+orientation holds by construction); the R*-U-U closed form runs the forward pass. The tests hold them to the
+numeric solution.
 
 Chain model (:func:`chain_kernel`), per pose: every element's compliance carried to C_i (cantilever links,
 drive ``c xi xi^T``, Hertz line contact in the link frame), the leg's wrench basis N (``I`` for rigid joints;
 for released joints the Householder complement of the passive twists), ``A = N^T S N``, ``E = G^T N`` and
 ``K_T = sum E A^-1 E^T``. The Hertz point contacts ``c I3`` on the translations are linearized at their leg's
 force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
-keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released legs
-with a closed form use their one wrench directly, the force along the line of the S and U centres.
+keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released
+P-S-U and U-P-S legs use their one wrench directly, the force along the line of the S and U centres.
 
 :func:`evaluate_kernel` runs both in one call over all poses, block by block (the default of
 :func:`femcheck.parallel.chain_model.evaluate` when no state is given); there a closed-form leg computes only
-what the chain model reads (no passive joint angles, unless a joint limit needs them, and no passive twists).
+what the chain model reads (no passive joint angles, unless a joint limit needs them, and no passive twists; the
+R*-U-U leg gives all of them, its released wrench basis needs the passive twists). Every helper the per-pose loops
+call is a leaf, for speed: see :func:`_rot`.
 """
 from __future__ import annotations
 
