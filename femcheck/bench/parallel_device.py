@@ -10,7 +10,9 @@ kernel on a state solved beforehand. The timings are interleaved (kernel, genera
 of ``REPEAT`` rounds) so that a busy shared machine loads them alike, and measured in CPU time of the process
 (``time.process_time``; wall time counted the other jobs' share of the two cores). Then the closed-form inverse
 kinematics against the numeric one on the same poses: largest joint-value difference (m or rad) and relative K_T
-difference (6-PSU), joint values (hexapod, rotated poses).
+difference (6-PSU), joint values (hexapod, rotated poses), joint values and relative K_T difference (Delta, R*-U-U,
+random poses of its cube), and the Delta's inverse kinematics alone, closed form against the compiled
+Gauss-Newton (``delta_3ruu_numeric_over_closed_form_ik_time_ratio``: how many times faster the closed form is).
 Then the hexapod and the Delta: poses/s of the detailed model (compiled and numpy, with inverse kinematics),
 and the beam FE's largest relative difference from it at the nine test points (both levels, both idealizations).
 """
@@ -104,6 +106,23 @@ def run() -> dict:
             a, b = solve_legs(case.device, Ph), solve_legs_compiled(case.device, Ph, numeric_only=True)
             out["closed_form_vs_numeric_ik_max_abs_dq_hexapod"] = max(float(np.abs(x.q - y.q).max())
                                                                       for x, y in zip(a.legs, b.legs))
+        if name == "delta_3ruu":
+            # the R*-U-U closed form against the compiled Gauss-Newton, random poses of the test cube
+            Pr = np.tile(test_points(case)[0], (N_POSES, 1))
+            Pr[:, :3] += rng.uniform(-0.02, 0.02, (N_POSES, 3))
+            a, b = solve_legs(case.device, Pr), solve_legs_compiled(case.device, Pr, numeric_only=True)
+            out["closed_form_vs_numeric_ik_max_abs_dq_delta"] = max(float(np.abs(x.q - y.q).max())
+                                                                    for x, y in zip(a.legs, b.legs))
+            out["closed_form_vs_numeric_ik_max_rel_dK_delta"] = max(
+                float(np.abs(evaluate(case.device, Pr, [0, 0, 10, 0, 0, 0], joints=j, state=a).K
+                             - evaluate(case.device, Pr, [0, 0, 10, 0, 0, 0], joints=j, state=b).K).max()
+                      / np.abs(evaluate(case.device, Pr, [0, 0, 10, 0, 0, 0], joints=j, state=b).K).max())
+                for j in ("rigid", "released"))
+            r_ik = _rates({"closed": lambda: solve_legs(case.device, Pr),
+                           "numeric": lambda: solve_legs_compiled(case.device, Pr, numeric_only=True)}, N_POSES)
+            out["delta_3ruu_closed_form_ik_poses_per_s"] = round(r_ik["closed"])
+            out["delta_3ruu_numeric_ik_poses_per_s"] = round(r_ik["numeric"])
+            out["delta_3ruu_numeric_over_closed_form_ik_time_ratio"] = round(r_ik["closed"] / r_ik["numeric"], 2)
         out[f"{name}_detailed_numpy_with_ik_poses_per_s"] = round(r_np["np"])
         worst = 0.0
         for model in ("simplified", "detailed"):

@@ -7,8 +7,9 @@ its joint laws. The element kinds index ``device.element_names`` (the columns of
 :class:`~femcheck.parallel.device.Leg` objects, laid out for machine code.
 
 Closed-form inverse kinematics (``ik_kind``): 1 for an ``F-P*-S-U`` leg (the 6-PSU's: slider position from the
-sphere ``|C - B| = L``), 2 for a ``U-P*-S`` strut (leg length ``|p + R b - a|``); 0 = numeric only. A closed form
-needs the S joint's three axes orthonormal and right-handed and the U joint's two axes not parallel.
+sphere ``|C - B| = L``), 2 for a ``U-P*-S`` strut (leg length ``|p + R b - a|``), 3 for an ``R*-U-U`` leg (the
+Delta's: crank angle from the circle of the elbow meeting the sphere of the rod); 0 = numeric only. A closed form
+needs the S joint's three axes orthonormal and right-handed and each U joint's two axes not parallel.
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import weakref
 import numpy as np
 
 #: ik_kind codes
-IK_NUMERIC, IK_PSU, IK_UPS = 0, 1, 2
+IK_NUMERIC, IK_PSU, IK_UPS, IK_RUU = 0, 1, 2, 3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +61,9 @@ def _orthonormal_right(A) -> bool:
 
 def _ik_kind(leg) -> int:
     kinds = "".join(leg.dof_kind)
+    if leg.joint_types == ("R", "U", "U") and kinds == "RRRRR" and leg.actuated_dof == 0:
+        parallel = [np.linalg.norm(np.cross(*leg.dof_axis[k:k + 2])) < 1e-6 for k in (1, 3)]
+        return IK_NUMERIC if any(parallel) else IK_RUU
     if leg.joint_types == ("F", "P", "S", "U") and kinds == "PRRRRR" and leg.actuated_dof == 0:
         s_axes, u_axes = leg.dof_axis[1:4], leg.dof_axis[4:6]
     elif leg.joint_types == ("U", "P", "S") and kinds == "RRPRRR" and leg.actuated_dof == 2:
@@ -69,6 +73,17 @@ def _ik_kind(leg) -> int:
     if not _orthonormal_right(s_axes.T) or np.linalg.norm(np.cross(*u_axes)) < 1e-6:
         return IK_NUMERIC
     return IK_PSU if leg.joint_types[0] == "F" else IK_UPS
+
+
+def _ruu_home_branch(leg) -> float:
+    """Sign sigma of the crank root ``q0 = atan2(beta, alpha) - sigma acos(kappa / rho)`` of an R*-U-U leg that is
+    the home configuration (q0 = 0; the R*-U-U closed form of chain_kernel._ik_range): at home ``kappa = alpha``, so
+    ``acos(kappa / rho) = |atan2(beta, alpha)|`` and sigma is the sign of ``beta = 2 d . (a x v_perp)``."""
+    a, A = leg.dof_axis[0], leg.dof_point[0]
+    v = leg.centres[1] - A
+    v_perp = v - (v @ a) * a
+    d = leg.centres[2] - A - (v @ a) * a
+    return float(np.sign(d @ np.cross(a, v_perp)) or 1.0)
 
 
 def _build(device) -> DeviceTables:
@@ -98,7 +113,7 @@ def _build(device) -> DeviceTables:
     hp_joint = np.full((L, nhp), -1, np.int64)
     lim_d = np.zeros((L, nlim), np.int64)
     lim = np.zeros((L, nlim, 2))
-    f_leg = np.zeros((L, 2))                    # drive compliance, sign of the F-P-S-U slider root at home
+    f_leg = np.zeros((L, 2))                    # drive compliance, home branch of the F-P-S-U / R-U-U root
     b_plat = np.zeros((L, 3))
     kinds = np.array([names.index("drive"),
                       names.index("hertz_point") if "hertz_point" in names else -1,
@@ -136,6 +151,8 @@ def _build(device) -> DeviceTables:
         f_leg[l, 0] = leg.drive_compliance
         if ik[l] == IK_PSU:
             f_leg[l, 1] = np.sign(leg.dof_axis[0] @ (leg.centres[2] - leg.centres[1])) or 1.0
+        elif ik[l] == IK_RUU:
+            f_leg[l, 1] = _ruu_home_branch(leg)
         b_plat[l] = leg.b_platform
         # the kernels' null space of the passive twists needs them independent (checked at the home configuration)
         tw = _home_twists(leg)[leg.passive_dofs]
