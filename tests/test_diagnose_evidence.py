@@ -149,3 +149,55 @@ def test_truncated_prior_mass_and_draws():
     from femcheck.diagnose.prior import draw_truth
     eid, vals = draw_truth(get_effect("actuation_in_legs"), model, rng)
     assert eid == "actuation_in_legs" and 1 <= len(vals) <= 5 and all(0.0 <= v <= 30.0 for v in vals.values())
+
+
+@pytest.fixture(scope="module")
+def sparse_diagnosis():
+    import dataclasses as dc
+    import femcheck
+    from femcheck.diagnose import AnalyticalChainModel
+    from femcheck.experiment.simulate import simulate
+    from femcheck.measured import process
+    case = femcheck.load_case("cases/haptic_6psu.toml")
+    model = AnalyticalChainModel(case, "detailed", "rigid")
+    data = simulate(case, [("actuation_compliance", {"scale": 1.5})], seed=4, directions=("+z", "+x"), sweep=False).data
+    keep = np.isin(data.point, ["P0", "P6"])
+    data = dc.replace(data, **{f: getattr(data, f)[keep] for f in
+                               ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
+    return model, process(data, case)
+
+
+def test_diagnosis_weighs_by_laplace_on_request(sparse_diagnosis):
+    from femcheck.diagnose import diagnose
+    from femcheck.diagnose.evidence import posterior
+    model, readings = sparse_diagnosis
+    pool = ["actuation_compliance", "joint_contact_compliance", "link_modulus"]
+    d = diagnose(model, readings, candidates=pool, with_baseline=False, evidence_method="laplace")
+    w = d.weighing
+    assert w.method == "laplace" and d.as_json()["evidence"].startswith("Laplace")
+    assert all(e.occam is not None for e in w.explanations if e.n_params)
+    # the weighing's probabilities are the Laplace posterior of its explanations (same fits, exact re-evaluation)
+    assert np.allclose(w.probability, posterior(w.explanations, w.n_data, "laplace"), rtol=1e-12, atol=0)
+    # a one-parameter Occam term: ln(1 + w^2 J^T J) + z^2 + 2 ln mass, positive and below BIC's ln N + 10 here
+    single = next(e for e in w.explanations if e.ids == ("actuation_compliance",))
+    assert 0.0 < single.occam < np.log(w.n_data) + 10.0
+    assert d.causes[0].id == "actuation_compliance"      # a 1.5x softer drive, the truth, is named either way
+    with pytest.raises(ValueError, match="evidence_method"):
+        diagnose(model, readings, candidates=pool, with_baseline=False, evidence_method="aic")
+
+
+def test_gauss_newton_floor_and_a_stopped_fit(sparse_diagnosis):
+    from femcheck.diagnose.effects import get_effect
+    from femcheck.diagnose.fitting import fit_effects, gauss_newton_floor
+    rng = np.random.default_rng(2)
+    X, r = rng.normal(size=(40, 3)), rng.normal(size=40)
+    b, *_ = np.linalg.lstsq(X, r, rcond=None)
+    # linear residual: the floor is the least-squares minimum
+    assert gauss_newton_floor(r, X) == pytest.approx(float(np.sum((r - X @ b) ** 2)), rel=1e-12)
+    model, readings = sparse_diagnosis
+    effs = [get_effect("clearance"), get_effect("link_modulus")]
+    full = fit_effects(model, readings, effs, max_nfev=100)
+    stopped = fit_effects(model, readings, effs, max_nfev=100, stop_above=-1.0)   # every probe judged hopeless
+    # a stopped fit reports the chi^2 it reached: never below the converged one (less than fit tolerance 1e-6)
+    assert stopped.stopped_early and not full.stopped_early
+    assert stopped.chi2 >= full.chi2 * (1 - 1e-6)
