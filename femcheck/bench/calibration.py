@@ -74,10 +74,10 @@ def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
     return out
 
 
-def one_set(seed: int, pairs: bool = False, truth: str = "shrunk") -> GeneratedSet:
+def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: int = 1) -> GeneratedSet:
     """Generate, simulate and diagnose set ``seed`` (module docstring); ``truth`` "prior" | "shrunk"; ``pairs`` (shrunk
     only): draw the hidden explanation from the diagnosis's size prior (none, single, pair 1/3 each) instead of none
-    or one effect with equal chances."""
+    or one effect with equal chances; ``max_located``: placements of located effects that join the rivals."""
     import dataclasses as dc
 
     import femcheck
@@ -114,7 +114,7 @@ def one_set(seed: int, pairs: bool = False, truth: str = "shrunk") -> GeneratedS
     data = dc.replace(ve.data, **{f: getattr(ve.data, f)[keep] for f in
                                   ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
     t0 = time.perf_counter()
-    d = diagnose(model, process(data, case), with_baseline=False)
+    d = diagnose(model, process(data, case), with_baseline=False, max_located=max_located)
     seconds = time.perf_counter() - t0
     from femcheck.diagnose import evidence
     w = d.weighing
@@ -166,12 +166,13 @@ def _tables(sets, key) -> dict:
     return {"explanations": reliability(ep, er), "causes": reliability(cp, cr), "leader": reliability(top_p, top_r)}
 
 
-def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk") -> dict:
+def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk",
+                max_located: int = 1) -> dict:
     """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
     tables of the default evidence (top level) and of each approximation (``by_method``), the sets and the wall time."""
     from femcheck.diagnose import evidence
     t0 = time.perf_counter()
-    args = [(s, pairs, truth) for s in range(seed, seed + n_sets)]
+    args = [(s, pairs, truth, max_located) for s in range(seed, seed + n_sets)]
     if jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
         with ProcessPoolExecutor(jobs) as ex:
@@ -240,11 +241,13 @@ def main(argv=None) -> int:
                     "diagnosis's size prior (1/3 each) instead of none or one effect")
     ap.add_argument("--truth", choices=("prior", "shrunk"), default="prior",
                     help="draw the hidden truths from the evidence's prior (default) or shrink Effect.sample_truth")
+    ap.add_argument("--max-located", type=int, default=1, help="placements of located effects weighed (diagnose's "
+                    "max_located)")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
-    res = calibration(a.sets, a.jobs, a.seed, a.pairs, a.truth)
+    res = calibration(a.sets, a.jobs, a.seed, a.pairs, a.truth, a.max_located)
     cmd = (f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed} --truth {a.truth}"
-           + (" --pairs" if a.pairs else ""))
+           + (" --pairs" if a.pairs else "") + (f" --max-located {a.max_located}" if a.max_located != 1 else ""))
     text = markdown(res, cmd)
     from femcheck.report.atomic import write_text_atomic
     write_text_atomic(a.out, text + "\n")
