@@ -38,3 +38,19 @@ def test_shrunk_truth_moves_towards_the_neutral_value():
     full = shrunk_truth(eff, model, np.random.default_rng(4), case, 1.0)["E_factor"]
     half = shrunk_truth(eff, model, np.random.default_rng(4), case, 0.5)["E_factor"]
     assert half == pytest.approx(np.sqrt(full))
+
+
+def test_a_set_drawn_from_the_prior_is_weighed_by_both_evidences():
+    """``--truth prior``: the hidden explanation comes from the size prior and its parameters from the stated prior;
+    both evidence approximations weigh the same fits, each a probability distribution over the same rivals."""
+    from femcheck.bench.calibration import one_set
+    s = one_set(3, truth="prior")
+    assert set(s.by_method) == {"laplace", "bic"} and len(s.hidden) <= 2
+    for m, expl in s.by_method.items():
+        assert sum(p for _, p in expl) == pytest.approx(1.0, abs=1e-12)      # normalized posterior
+        assert {ids for ids, _ in expl} == {ids for ids, _ in s.by_method["bic"]}
+    # the generator's truth lies within each parameter's bounds
+    from femcheck.diagnose.effects import get_effect
+    for eid, params in s.truth:
+        bounds = {p.name: (p.lower, p.upper) for p in get_effect(eid).params}
+        assert all(bounds[n][0] <= v <= bounds[n][1] for n, v in params)

@@ -1,19 +1,32 @@
 """Are the diagnosis probabilities calibrated? (issue 15 item 2): a reliability table on generated sets.
 
-Each generated set hides nothing or one effect of the vocabulary (equal chances) at a magnitude drawn between
-"barely there" and the effect's usual test magnitude: the parameters of ``Effect.sample_truth`` moved towards
-the effect's neutral value by a factor f ~ U(0.03, 0.6) in the optimizer's scaled coordinates (log10 for log
-parameters). The protocol is sparse so that the probabilities are not all 0 or 1: 2 to 4 random test points,
-1 to 3 random signed axis directions, no preload sweep, 3 trials, the case's noise and dial. Each set is
-diagnosed (analytical detailed model, every single effect and pair weighed) and every explanation's posterior
-probability is paired with whether it is the hidden one (explanation level), and every effect's marginal
-probability (the sum over the explanations that contain it) with whether it is hidden (cause level).
+Two generators of hidden truths (``--truth``):
+
+* ``prior`` (default): the diagnosis's own prior. The hidden explanation is drawn from the size prior of
+  :func:`femcheck.diagnose.evidence.size_prior` (none, a single effect, a pair with 1/3 each, uniform within the
+  size, over the applicable vocabulary) and each hidden effect's parameters from the parameter prior of
+  :mod:`femcheck.diagnose.prior` (the prior the Laplace evidence integrates over; a located effect first draws its
+  legs). If the evidence were exact, the posterior would then be calibrated by construction (Bayes' rule on the
+  generating distribution); what the table measures is the error of the evidence approximation (Laplace or BIC),
+  of the fits (local optima, warm starts) and of the noise model (sigma estimated from 3 trials, quantized dials);
+* ``shrunk``: none or one effect (equal chances; ``--pairs``: the size prior), at a magnitude drawn between "barely
+  there" and the effect's usual test magnitude: the parameters of ``Effect.sample_truth`` moved towards the effect's
+  neutral value by a factor f ~ U(0.03, 0.6) in the optimizer's scaled coordinates (log10 for log parameters).
+  This generator is *not* the evidence's prior; it tests robustness to a prior mismatch.
+
+The protocol is sparse so that the probabilities are not all 0 or 1: 2 to 4 random test points, 1 to 3 random
+signed axis directions, no preload sweep, 3 trials, the case's noise and dial. Each set is diagnosed (analytical
+detailed model, every single effect and pair weighed) and, for each evidence approximation (``laplace`` and ``bic``,
+weighed on the same fits), every explanation's posterior probability is paired with whether it is the hidden one
+(explanation level), and every effect's marginal probability (the sum over the explanations that contain it) with
+whether it is hidden (cause level).
 
 The reliability table bins the predicted probabilities and gives, per bin, the number of predictions, their
 mean and the observed frequency of being right, with a binomial standard error; ``ece`` is the expected
 calibration error (count-weighted mean |observed - predicted|), ``brier`` the mean squared error.
 
-``python -m femcheck.bench.calibration [--sets 60] [--jobs 2] [--seed 0] [--out reports/diagnose/calibration.md]``
+``python -m femcheck.bench.calibration [--sets 60] [--jobs 2] [--seed 0] [--truth prior|shrunk] [--pairs]
+[--out reports/diagnose/calibration.md]``
 """
 from __future__ import annotations
 
@@ -32,8 +45,9 @@ AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
 
 @dataclasses.dataclass(frozen=True)
 class GeneratedSet:
-    """One diagnosed set: ``hidden`` the hidden effect ids (empty = none), ``explanations`` [(ids, probability)],
-    ``causes`` {effect id: marginal probability}, ``points``, ``directions``, ``seconds``."""
+    """One diagnosed set: ``hidden`` the hidden effect ids (empty = none), ``explanations`` [(ids, probability)] and
+    ``causes`` {effect id: marginal probability} of the default evidence, ``by_method`` {method: explanations} for
+    each evidence approximation, ``points``, ``directions``, ``seconds``."""
 
     seed: int
     hidden: tuple[str, ...]
@@ -43,6 +57,8 @@ class GeneratedSet:
     explanations: tuple
     causes: dict
     seconds: float
+    by_method: dict = dataclasses.field(default_factory=dict)
+    truth: tuple = ()
 
 
 def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
@@ -58,9 +74,10 @@ def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
     return out
 
 
-def one_set(seed: int, pairs: bool = False) -> GeneratedSet:
-    """Generate, simulate and diagnose set ``seed`` (module docstring); ``pairs``: draw the hidden explanation from the
-    diagnosis's size prior (none, single, pair 1/3 each) instead of none or one effect with equal chances."""
+def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: int = 1) -> GeneratedSet:
+    """Generate, simulate and diagnose set ``seed`` (module docstring); ``truth`` "prior" | "shrunk"; ``pairs`` (shrunk
+    only): draw the hidden explanation from the diagnosis's size prior (none, single, pair 1/3 each) instead of none
+    or one effect with equal chances; ``max_located``: placements of located effects that join the rivals."""
     import dataclasses as dc
 
     import femcheck
@@ -74,15 +91,22 @@ def one_set(seed: int, pairs: bool = False) -> GeneratedSet:
     model = AnalyticalChainModel(case, "detailed", "rigid")
     rng = np.random.default_rng(10_000 + seed)
     pool = [e for e in VOCABULARY if e != "none" and get_effect(e).applicable(model)]
-    if pairs:
+    if truth not in ("prior", "shrunk"):
+        raise ValueError(f"truth: {truth!r}; expected prior or shrunk")
+    if pairs or truth == "prior":
         # the diagnosis's own prior (evidence.size_prior): none, a single, a pair with 1/3 each, uniform within
         size = int(rng.integers(3))
         picks = [] if size == 0 else sorted(rng.choice(len(pool), size=size, replace=False).tolist())
     else:
         pick = int(rng.integers(len(pool) + 1))
         picks = [] if pick == len(pool) else [pick]
-    shrink = float(rng.uniform(0.03, 0.6))
-    hidden = [(pool[i], shrunk_truth(get_effect(pool[i]), model, rng, case, shrink)) for i in picks]
+    if truth == "prior":
+        from femcheck.diagnose.prior import draw_truth
+        shrink = float("nan")
+        hidden = [draw_truth(get_effect(pool[i]), model, rng) for i in picks]
+    else:
+        shrink = float(rng.uniform(0.03, 0.6))
+        hidden = [(pool[i], shrunk_truth(get_effect(pool[i]), model, rng, case, shrink)) for i in picks]
     points = tuple(sorted(rng.choice(POINT_LABELS, size=int(rng.integers(2, 5)), replace=False).tolist()))
     directions = tuple(rng.choice(AXES, size=int(rng.integers(1, 4)), replace=False).tolist())
     ve = simulate(case, hidden, seed=seed, directions=directions, sweep=False)
@@ -90,12 +114,19 @@ def one_set(seed: int, pairs: bool = False) -> GeneratedSet:
     data = dc.replace(ve.data, **{f: getattr(ve.data, f)[keep] for f in
                                   ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
     t0 = time.perf_counter()
-    d = diagnose(model, process(data, case), with_baseline=False)
+    d = diagnose(model, process(data, case), with_baseline=False, max_located=max_located)
+    seconds = time.perf_counter() - t0
+    from femcheck.diagnose import evidence
     w = d.weighing
-    expl = tuple((tuple(sorted(e.ids)), float(p)) for e, p in zip(w.explanations, w.probability))
+    by_method = {}
+    for m in evidence.EVIDENCE_METHODS:
+        p = evidence.posterior(w.explanations, w.n_data, m)
+        by_method[m] = tuple((tuple(sorted(e.ids)), float(q)) for e, q in zip(w.explanations, p))
+    expl = by_method[w.method]
     causes = {c: float(sum(p for ids, p in expl if c in ids)) for c in pool}
     return GeneratedSet(seed=seed, hidden=tuple(h[0] for h in hidden), shrink=shrink, points=points,
-                        directions=directions, explanations=expl, causes=causes, seconds=time.perf_counter() - t0)
+                        directions=directions, explanations=expl, causes=causes, seconds=seconds, by_method=by_method,
+                        truth=tuple((h[0], tuple(sorted(h[1].items()))) for h in hidden))
 
 
 def reliability(predicted, right, bins=BINS) -> dict:
@@ -113,47 +144,69 @@ def reliability(predicted, right, bins=BINS) -> dict:
     return {"bins": rows, "ece": ece, "brier": float(np.mean((p - y) ** 2)) if len(p) else float("nan"), "n": int(len(p))}
 
 
-def _one_set_pairs(seed: int) -> GeneratedSet:
-    return one_set(seed, pairs=True)
+def _one_set_args(args) -> GeneratedSet:
+    return one_set(*args)
 
 
-def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False) -> dict:
-    """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
-    tables, the sets and the wall time."""
-    t0 = time.perf_counter()
-    seeds = list(range(seed, seed + n_sets))
-    if jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-        with ProcessPoolExecutor(jobs) as ex:
-            sets = list(ex.map(_one_set_pairs if pairs else one_set, seeds))
-    else:
-        sets = [one_set(s, pairs) for s in seeds]
+def _tables(sets, key) -> dict:
+    """Explanation-, cause- and leader-level reliability tables of ``sets`` for the explanations ``key(set)``."""
     ep, er, cp, cr, top_p, top_r = [], [], [], [], [], []
     for s in sets:
         truth = tuple(sorted(s.hidden))
-        for k, (ids, p) in enumerate(s.explanations):
+        expl = key(s)
+        for ids, p in expl:
             ep.append(p)
             er.append(ids == truth)
-        lead = max(s.explanations, key=lambda t: t[1])
+        lead = max(expl, key=lambda t: t[1])
         top_p.append(lead[1])
         top_r.append(lead[0] == truth)
-        for c, p in s.causes.items():
-            cp.append(p)
+        for c in s.causes:
+            cp.append(float(sum(p for ids, p in expl if c in ids)))
             cr.append(c in s.hidden)
-    return {"explanations": reliability(ep, er), "causes": reliability(cp, cr), "leader": reliability(top_p, top_r),
-            "sets": sets, "n_sets": n_sets, "wall_s": time.perf_counter() - t0,
-            "mean_diagnosis_s": float(np.mean([s.seconds for s in sets])) if sets else float("nan")}
+    return {"explanations": reliability(ep, er), "causes": reliability(cp, cr), "leader": reliability(top_p, top_r)}
+
+
+def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk",
+                max_located: int = 1) -> dict:
+    """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
+    tables of the default evidence (top level) and of each approximation (``by_method``), the sets and the wall time."""
+    from femcheck.diagnose import evidence
+    t0 = time.perf_counter()
+    args = [(s, pairs, truth, max_located) for s in range(seed, seed + n_sets)]
+    if jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+        with ProcessPoolExecutor(jobs) as ex:
+            sets = list(ex.map(_one_set_args, args))
+    else:
+        sets = [one_set(*a) for a in args]
+    out = _tables(sets, lambda s: s.explanations)
+    out["by_method"] = {m: _tables(sets, lambda s, m=m: s.by_method[m]) for m in evidence.EVIDENCE_METHODS}
+    out.update(sets=sets, n_sets=n_sets, wall_s=time.perf_counter() - t0, default_method=evidence.EVIDENCE,
+               mean_diagnosis_s=float(np.mean([s.seconds for s in sets])) if sets else float("nan"))
+    return out
 
 
 def markdown(result: dict, command: str) -> str:
     """The reliability tables as Markdown, with the command that produced them."""
     out = [f"`{command}` ({result['n_sets']} sets, {result['wall_s']:.0f} s, mean diagnosis "
-           f"{result['mean_diagnosis_s']:.1f} s)", ""]
+           f"{result['mean_diagnosis_s']:.1f} s; default evidence {result['default_method']})", "",
+           "| evidence | explanation ECE | explanation Brier | cause ECE | cause Brier | leader ECE |", "|---|---|---|---|---|---|"]
+    for m, t in result["by_method"].items():
+        out.append(f"| {m} | {t['explanations']['ece']:.4f} | {t['explanations']['brier']:.4f} | {t['causes']['ece']:.4f} | "
+                   f"{t['causes']['brier']:.4f} | {t['leader']['ece']:.4f} |")
+    out.append("")
+    for m, t in result["by_method"].items():
+        out += _markdown_tables(t, f" ({m})")
+    return "\n".join(out + _markdown_wrong(result))
+
+
+def _markdown_tables(result: dict, tag: str) -> list:
+    out = []
     for key, title in (("explanations", "every explanation's posterior vs being the hidden one"),
                        ("causes", "every effect's marginal probability vs being hidden"),
                        ("leader", "the leading explanation's posterior vs being the hidden one")):
         r = result[key]
-        out += [f"**{title}** ({r['n']} predictions; ECE {r['ece']:.3f}, Brier {r['brier']:.3f})", "",
+        out += [f"**{title}{tag}** ({r['n']} predictions; ECE {r['ece']:.3f}, Brier {r['brier']:.3f})", "",
                 "| predicted | n | mean predicted | observed right | ± se |", "|---|---|---|---|---|"]
         for b in r["bins"]:
             if b["n"]:
@@ -162,6 +215,11 @@ def markdown(result: dict, command: str) -> str:
             else:
                 out.append(f"| {b['lo']:.1f}–{b['hi']:.1f} | 0 | – | – | – |")
         out.append("")
+    return out
+
+
+def _markdown_wrong(result: dict) -> list:
+    out = []
     wrong = [(s, ids, p) for s in result["sets"] for ids, p in s.explanations
              if p >= 0.9 and ids != tuple(sorted(s.hidden))]
     if wrong:
@@ -170,7 +228,7 @@ def markdown(result: dict, command: str) -> str:
         out += [f"| {s.seed} | {'+'.join(s.hidden) or 'none'} | {s.shrink:.2f} | {' '.join(s.points)} | "
                 f"{' '.join(s.directions)} | {'+'.join(ids) or 'none'} | {p:.3f} |" for s, ids, p in wrong]
         out.append("")
-    return "\n".join(out)
+    return out
 
 
 def main(argv=None) -> int:
@@ -179,12 +237,17 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="reports/diagnose/calibration.md")
-    ap.add_argument("--pairs", action="store_true", help="hide none, one or two effects with the diagnosis's size prior "
-                    "(1/3 each) instead of none or one effect")
+    ap.add_argument("--pairs", action="store_true", help="(--truth shrunk) hide none, one or two effects with the "
+                    "diagnosis's size prior (1/3 each) instead of none or one effect")
+    ap.add_argument("--truth", choices=("prior", "shrunk"), default="prior",
+                    help="draw the hidden truths from the evidence's prior (default) or shrink Effect.sample_truth")
+    ap.add_argument("--max-located", type=int, default=1, help="placements of located effects weighed (diagnose's "
+                    "max_located)")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
-    res = calibration(a.sets, a.jobs, a.seed, a.pairs)
-    cmd = f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed}" + (" --pairs" if a.pairs else "")
+    res = calibration(a.sets, a.jobs, a.seed, a.pairs, a.truth, a.max_located)
+    cmd = (f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed} --truth {a.truth}"
+           + (" --pairs" if a.pairs else "") + (f" --max-located {a.max_located}" if a.max_located != 1 else ""))
     text = markdown(res, cmd)
     from femcheck.report.atomic import write_text_atomic
     write_text_atomic(a.out, text + "\n")

@@ -28,6 +28,9 @@ def register(app: typer.Typer) -> None:
                                   "(default: the case's measurement.folds; the CSV's fold column wins)"),
         pose_table: str = typer.Option(None, "--pose-table", metavar="PLAN.json",
                                   help="pose table for point ids other than P0..P8: the JSON of `femcheck plan`"),
+        evidence: str = typer.Option(None, "--evidence", metavar="bic|laplace",
+                                     help="evidence approximation of the posterior probabilities (default bic; "
+                                          "docs/diagnose.md, calibration)"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -36,6 +39,9 @@ def register(app: typer.Typer) -> None:
         from femcheck.diagnose.device_match import device_mismatch_warnings
         from femcheck.report.atomic import check_output_dir, check_output_file, refuse_input_overwrite, write_text_atomic
 
+        from femcheck.diagnose.evidence import EVIDENCE_METHODS
+        if evidence is not None and evidence not in EVIDENCE_METHODS:
+            raise typer.BadParameter(f"--evidence: {evidence!r}; expected one of {', '.join(EVIDENCE_METHODS)}")
         if json_out and json_out != "-":
             check_output_file(json_out, "--json")
         if report:
@@ -59,7 +65,7 @@ def register(app: typer.Typer) -> None:
         readings = process(data, case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         mismatch = device_mismatch_warnings(case, data.meta, readings, m)
-        d = diagnose(m, readings, max_effects=max_effects)
+        d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
         result["warnings"] = list(result.get("warnings", [])) + mismatch
         if json_out == "-":

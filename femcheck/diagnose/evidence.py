@@ -7,10 +7,21 @@ returns
 * the goodness of fit of each: chi^2 / dof with dof = N - k and the upper-tail p-value
   P(chi^2_dof >= chi^2) for a stated sigma (Gaussian noise; Press et al., Numerical Recipes §15.1), or the
   lack-of-fit F test P(F(dof, nu) >= chi^2 / dof) when sigma was estimated from replicates with nu dof;
-* posterior probabilities over the explanations from the Schwarz (BIC) approximation of the evidence,
-  ``-2 ln p(D | M) ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery 1995 §4.1.3), with a prior that gives
-  every explanation size (none, singles, pairs) equal mass, shared equally within the size (Scott & Berger 2010):
-  ``P(M_i | D) = pi_i exp(-BIC_i / 2) / sum_j pi_j exp(-BIC_j / 2)``;
+* posterior probabilities over the explanations, ``P(M_i | D) = pi_i Z_i / sum_j pi_j Z_j`` with a prior that gives
+  every explanation size (none, singles, pairs) equal mass, shared equally within the size (Scott & Berger 2010),
+  and one of two approximations of the evidence Z = p(D | M) (``method``):
+
+  - ``"laplace"`` (:func:`laplace_score`): the Laplace approximation with the stated parameter prior of
+    :mod:`femcheck.diagnose.prior` (MacKay, Information Theory, Inference and Learning Algorithms, 2003, ch. 27-28;
+    Kass & Raftery, JASA 90 (1995) 773, §4.1.1),
+    ``ln Z = ln L(x*) + ln p(x*) + (k/2) ln 2 pi - 1/2 ln det H``, H the Hessian of the negative log posterior
+    (Gauss-Newton: J^T J + W^-2 in the weighted residuals' Jacobian J, W the prior standard deviations);
+  - ``"bic"``: the Schwarz criterion ``-2 ln Z ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery §4.1.3),
+    the Laplace evidence's large-N limit with a unit-information prior;
+
+  an Explanation without the Laplace ingredients (``occam`` None) is weighed by BIC. The default (:data:`EVIDENCE`)
+  is ``"bic"``: on the calibration bench (``femcheck.bench.calibration``, 120 sets drawn from the Laplace prior) its
+  cause marginals were the better calibrated (ECE 0.033 against 0.038; docs/diagnose.md);
 * the ambiguity between the named explanation and its strongest rival that is neither a sub- nor a
   superset of it: they are called *not separable* when their posterior ratio is below ``ambiguity_ratio`` (default 3, |Delta BIC| < 2.2: "not worth more than a
   bare mention" on Kass & Raftery's scale);
@@ -39,6 +50,9 @@ ALPHA = 1e-3
 AMBIGUITY_RATIO = 3.0
 
 VERDICTS = ("none", "explained", "unexplained")
+EVIDENCE_METHODS = ("laplace", "bic")
+#: the default evidence approximation (the better calibrated on the calibration bench, docs/diagnose.md)
+EVIDENCE = "bic"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,6 +67,17 @@ class Explanation:
     #: extra -2 ln prior of a model chosen by a search over candidates, e.g. the extended BIC's 2 ln C(p, k)
     #: for k places picked among p (Chen & Chen, Biometrika 95 (2008) 759); 0 for a fixed model
     penalty: float = 0.0
+    #: Laplace Occam term -2 ln Z - chi^2 (:func:`laplace_score`); None: weigh this explanation by BIC
+    occam: float | None = None
+
+    def score(self, n_data: int, method: str | None = None) -> float:
+        """-2 ln (evidence) up to a constant shared by all explanations, plus the placement ``penalty``."""
+        method = method or EVIDENCE
+        if method not in EVIDENCE_METHODS:
+            raise ValueError(f"evidence method {method!r}; expected one of {', '.join(EVIDENCE_METHODS)}")
+        if method == "laplace" and (self.occam is not None or self.n_params == 0):
+            return float(self.chi2 + (self.occam or 0.0) + self.penalty)
+        return bic(self.chi2, self.n_params, n_data) + self.penalty
 
     @property
     def name(self) -> str:
@@ -87,9 +112,42 @@ def size_prior(explanations) -> np.ndarray:
     return np.array([per[int(k)] for k in sizes])
 
 
-def posterior(explanations, n_data: int) -> np.ndarray:
-    """(n,) BIC posterior probabilities with the size prior of :func:`size_prior` (sum 1)."""
-    b = np.array([bic(e.chi2, e.n_params, n_data) + e.penalty for e in explanations], float)
+def laplace_score(chi2: float, jacobian: np.ndarray, x: np.ndarray, mu: np.ndarray, sd: np.ndarray,
+                  mass: np.ndarray | None = None, on_bound: np.ndarray | None = None) -> float:
+    """-2 ln Z of the Laplace approximation, up to the model-independent likelihood constant N ln 2 pi + 2 sum ln sigma.
+
+    ``chi2``: chi^2 at the maximum-likelihood point ``x`` (k,) (scaled coordinates); ``jacobian`` (N, k) of the
+    weighted residuals there; prior x ~ N(``mu``, diag ``sd``^2), truncated so that ``mass`` (k,) of it lies inside the
+    bounds (density 1 / mass inside). With A = J^T J, P = diag(sd^-2), d = x - mu and W = diag(sd):
+
+        -2 ln Z = chi2 + d^T (P - P (A + P)^-1 P) d + ln det(I + W A W) + 2 sum ln mass + 2 ln 2 * n_on_bound,
+
+    the second term the chi^2 + prior penalty at the maximum a posteriori point (one Gauss-Newton step from x), the
+    third the posterior volume over the prior volume (the Occam factor; -> k ln N + O(1) for N data, i.e. BIC). Exact
+    for a linear model with an untruncated prior. A parameter on its bound at the optimum (``on_bound``) keeps about
+    half of the Gaussian posterior mass: ln 2 each (the half-Gaussian Laplace approximation)."""
+    J = np.asarray(jacobian, float)
+    k = J.shape[1]
+    if k == 0:
+        return float(chi2)
+    A = J.T @ J
+    P = np.diag(1.0 / np.asarray(sd, float) ** 2)
+    d = np.asarray(x, float) - np.asarray(mu, float)
+    quad = float(d @ (P - P @ np.linalg.solve(A + P, P)) @ d)
+    W = np.diag(np.asarray(sd, float))
+    sign, logdet = np.linalg.slogdet(np.eye(k) + W @ A @ W)
+    out = float(chi2) + max(quad, 0.0) + float(logdet)
+    if mass is not None:
+        out += 2.0 * float(np.sum(np.log(np.clip(mass, 1e-300, 1.0))))
+    if on_bound is not None:
+        out += 2.0 * np.log(2.0) * int(np.sum(on_bound))
+    return out
+
+
+def posterior(explanations, n_data: int, method: str | None = None) -> np.ndarray:
+    """(n,) posterior probabilities (``method`` "laplace" | "bic", default :data:`EVIDENCE`) with the size prior of
+    :func:`size_prior` (sum 1)."""
+    b = np.array([e.score(n_data, method) for e in explanations], float)
     w = np.exp(-0.5 * (b - b.min())) * size_prior(explanations)
     return w / w.sum()
 
@@ -111,6 +169,7 @@ class Weighing:
     unexplained_fraction: float
     ambiguous: bool
     ambiguity: str
+    method: str = "bic"
 
     @property
     def best(self) -> Explanation:
@@ -118,12 +177,13 @@ class Weighing:
 
     def alternatives(self, top: int = 10) -> list[dict]:
         return [{"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
-                 "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty}
+                 "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
+                 "minus2_log_evidence": e.score(self.n_data, self.method)}
                 for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
 
 
 def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: float = ALPHA,
-          ambiguity_ratio: float = AMBIGUITY_RATIO) -> Weighing:
+          ambiguity_ratio: float = AMBIGUITY_RATIO, method: str | None = None) -> Weighing:
     """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals.
 
     ``chosen``: the ids of the explanation the caller names (e.g. after a held-out check); default the
@@ -132,7 +192,8 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     nones = [e for e in ex if not e.ids]
     if not nones:
         raise ValueError("weigh needs the no-effect explanation (ids == ()) among the rivals")
-    p = posterior(ex, n_data)
+    method = method or EVIDENCE
+    p = posterior(ex, n_data, method)
     order = np.argsort(-p, kind="stable")
     ex, p = [ex[i] for i in order], p[order]
     none = nones[0]
@@ -162,4 +223,5 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     ambiguous = rival is not None and p[rival] > 0 and p[0] / p[rival] < ambiguity_ratio
     text = (f"{ex[0].name} {p[0]:.2f} vs {ex[rival].name} {p[rival]:.2f}: not separable with these measurements"
             if ambiguous else "")
-    return Weighing(tuple(ex), tuple(map(float, p)), int(n_data), verdict, c_b, p_b, c_n, p_n, frac, bool(ambiguous), text)
+    return Weighing(tuple(ex), tuple(map(float, p)), int(n_data), verdict, c_b, p_b, c_n, p_n, frac, bool(ambiguous), text,
+                    method)

@@ -65,7 +65,7 @@ class AnalyticalChainModel:
         pose = np.asarray(pose, float)
         W = np.zeros((len(pose), 6))
         W[:, :3] = force
-        r = evaluate(self.case, pose, W, model="detailed", joints=self.joints,
+        r = evaluate(self.case, pose, W, model="detailed", joints=self.joints, legs=_leg_geometry(self.case, pose),
                      adjust=ChainAdjustments(element_scale=element_scale, joint_rotation_compliance=joint_rotation_compliance))
         return r.twist[:, :3]
 
@@ -78,6 +78,22 @@ class AnalyticalChainModel:
         r = evaluate(self.case, pose, W, model="detailed", joints=self.joints,
                      adjust=ChainAdjustments(element_scale=scale, joint_rotation_compliance=joint_rotation_compliance))
         return r.K
+
+
+_LEGS_CACHE: dict = {}
+
+
+def _leg_geometry(case, pose: np.ndarray):
+    """Inverse kinematics of ``pose`` (m, 6), cached: a fit evaluates the model hundreds of times at the same poses
+    (the readings'), and the kinematics does not depend on the fitted parameters."""
+    from femcheck.kinematics.psu6 import leg_geometry
+    key = (id(case), pose.shape, pose.tobytes())
+    legs = _LEGS_CACHE.get(key)
+    if legs is None or legs[0] is not case:
+        if len(_LEGS_CACHE) >= 16:
+            _LEGS_CACHE.pop(next(iter(_LEGS_CACHE)))
+        legs = _LEGS_CACHE[key] = (case, leg_geometry(case, pose))
+    return legs[1]
 
 
 @dataclasses.dataclass

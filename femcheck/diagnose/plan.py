@@ -336,7 +336,10 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
         raise ValueError(f"plan_measurements needs each rival's fit (Explanation.payload); {missing[0]} has none: "
                          "weigh the FitResults of femcheck.diagnose.selection.fit_rivals")
     n_old = int(weighing.n_data)
-    bic_old = np.array([e.chi2 + e.n_params * np.log(n_old) for e in ex])
+    # -2 ln evidence of each rival with the weighing's approximation (Laplace or BIC); more data add k ln(N'/N) to
+    # either (the Occam factor of a Laplace evidence grows as that of BIC once the data dominate the prior)
+    method = getattr(weighing, "method", "bic")
+    bic_old = np.array([e.score(n_old, method) - e.penalty for e in ex])
     kpar = np.array([e.n_params for e in ex], float)
 
     cand = candidate_poses(case, n_poses, seed=seed, box_m=box_m, tilt_rad=tilt_rad, max_condition=max_condition)
@@ -421,6 +424,8 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
     post = softmax(-lnB[0], axis=1)
     now = 0.5 * (bic_old[top[1]] - bic_old[top[0]]) if K > 1 else float("inf")
     lead_causes = {c: float(sum(post[0, j] for j in range(K) if c in ex[top[j]].ids)) for c in ex[top[0]].ids}
+    if not ex[top[0]].ids:      # the leader is "no effect": its own expected posterior
+        lead_causes = {"none": float(post[0, 0])}
     rivals_out = tuple({"ids": list(ex[i].ids) or ["none"], "probability": float(prob[i]),
                         "expected_posterior_if_true": float(post[a, a])} for a, i in enumerate(top))
     notes = ("forces only: the case states no fixture for applied moments and the reading model takes TCP forces",

@@ -34,6 +34,12 @@ from femcheck.diagnose.placement import screen_placements
 
 log = logging.getLogger(__name__)
 
+EVIDENCE_TEXT = {
+    "bic": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N; prior: equal mass per explanation size (none, singles, pairs), "
+           "shared within the size",
+    "laplace": "Laplace: -2 ln p(D|M) ~ chi2 + d'(P - P(A+P)^-1 P)d + ln det(I + W A W) + 2 sum ln mass (A = J'J, "
+               "parameter prior N(mu, W^2) of femcheck.diagnose.prior); prior: equal mass per explanation size (none, "
+               "singles, pairs), shared within the size"}
 #: |trial drift| / its standard error above which the readings drift with trial order (a finding)
 DRIFT_Z = 5.0
 
@@ -171,7 +177,7 @@ class Diagnosis:
         return {"model": self.model_name, "verdict": w.verdict,
                 "causes": [c.as_dict() for c in self.causes],
                 "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
-                "evidence": "BIC (Schwarz): -2 ln p(D|M) ~ chi2 + k ln N; prior: equal mass per explanation size (none, singles, pairs), shared within the size",
+                "evidence": EVIDENCE_TEXT[w.method],
                 "residual": self.residual_json(),
                 "heldout_error_before": self.cv_before.error, "heldout_error_after": self.cv_after.error,
                 "heldout_error_along_load_before": self.cv_before.error_along,
@@ -217,7 +223,36 @@ def _lack_of_fit(readings, f: FitResult):
 
 
 def _explanation(f: FitResult) -> evidence.Explanation:
-    return evidence.Explanation(f.ids, f.chi2, f.n_params, f, penalty=f.penalty)
+    return evidence.Explanation(f.ids, f.chi2, f.n_params, f, penalty=f.penalty,
+                                occam=f.occam if f.occam is not None else (0.0 if f.n_params == 0 else None))
+
+
+#: a rival pair whose chi^2 cannot come within this of the leader's -2 ln (prior x evidence) is not fitted to the end
+#: (posterior < exp(-HOPELESS / 2) = 2e-9 of the leader's, under either evidence approximation)
+HOPELESS = 40.0
+
+
+def _total(ex: evidence.Explanation, n_data: int, prior: float, method: str) -> float:
+    return ex.score(n_data, method) - 2.0 * np.log(prior)
+
+
+def _size_prior(n_pool: int) -> dict:
+    """{size: prior of one explanation of that size} of :func:`femcheck.diagnose.evidence.size_prior` for none, the
+    ``n_pool`` singles and their pairs."""
+    n_sizes = 3 if n_pool >= 2 else 2
+    n_pairs = n_pool * (n_pool - 1) // 2
+    return {0: 1.0 / n_sizes, 1: 1.0 / (n_sizes * max(n_pool, 1)), 2: 1.0 / (n_sizes * max(n_pairs, 1))}
+
+
+def _best_total(explanations, n_data: int, prior: dict) -> float:
+    """An upper bound, under every evidence approximation, of the best -2 ln (prior x evidence) among
+    ``explanations``."""
+    return max(min(_total(e, n_data, prior[len(e.ids)], m) for e in explanations) for m in evidence.EVIDENCE_METHODS)
+
+
+def _hopeless_pair(best: float, k: int, prior: dict) -> float:
+    """chi^2 above which a pair of ``k`` parameters cannot come within :data:`HOPELESS` of ``best``."""
+    return best + HOPELESS + 2.0 * k * np.log(2.0) + 2.0 * np.log(prior[2])
 
 
 def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, known=None) -> list:
@@ -225,8 +260,14 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
     :class:`~femcheck.diagnose.evidence.Explanation` with the :class:`FitResult` as payload (and the extended-BIC
     penalty of located effects). Pairs start from the two singles' fitted values (one start, at most 100
     evaluations). ``known``: {frozenset of ids: FitResult} of fits already made with these effects (the greedy
-    selection's rounds, several starts), reused instead of refitted."""
+    selection's rounds, several starts), reused instead of refitted.
+
+    A pair fit is stopped after a short probe (``fit_effects(stop_above=...)``) when even a full Gauss-Newton step
+    could not bring its chi^2 within :data:`HOPELESS` of the best -2 ln (prior x evidence) found so far, under either
+    evidence approximation (the Occam term of a pair is >= -2 k ln 2 under both): its posterior is then below
+    2e-9 of the leader's whatever its exact optimum, and its chi^2 is reported as reached."""
     known = known or {}
+    n_data = 3 * readings.n_states
     out = [evidence.Explanation((), base.chi2, 0, base)]
     singles = {}
     for eff in pool:
@@ -234,6 +275,8 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
         singles[eff.id] = f
         out.append(_explanation(f))
     if pairs:
+        prior = _size_prior(len(pool))
+        best = _best_total(out + [_explanation(f) for ids, f in known.items() if len(ids) == 2], n_data, prior)
         for i, first in enumerate(pool):
             for second in pool[i + 1:]:
                 f = known.get(frozenset([first.id, second.id]))
@@ -241,18 +284,23 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
                     # order the pair by the singles' fit: the better single first
                     a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
                     start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
-                    f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100)
-                out.append(_explanation(f))
+                    f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100,
+                                    stop_above=_hopeless_pair(best, len(start), prior))
+                ex = _explanation(f)
+                out.append(ex)
+                best = min(best, max(_total(ex, n_data, prior[2], m) for m in evidence.EVIDENCE_METHODS))
     return out
 
 
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
-             max_located: int = 1) -> Diagnosis:
+             max_located: int = 1, evidence_method: str | None = None) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
-    candidates."""
+    candidates. ``evidence_method``: "laplace" | "bic" (default :data:`femcheck.diagnose.evidence.EVIDENCE`)."""
+    if evidence_method is not None and evidence_method not in evidence.EVIDENCE_METHODS:
+        raise ValueError(f"evidence_method: {evidence_method!r}; expected one of {', '.join(evidence.EVIDENCE_METHODS)}")
     if readings.n_cases == 0 or len(set(readings.case_point)) < 2:
         from femcheck.errors import MeasuredDataError
         raise MeasuredDataError(readings.source, None, "point", "a diagnosis needs preload and total readings at two or "
@@ -276,11 +324,21 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         for eff in pool:
             if eff in chosen:
                 continue
-            starts = None
+            starts, stop = None, None
             if chosen:
                 prev = np.concatenate(cur_fit.values)
                 starts = [np.concatenate([prev, s]) for s in eff.starts(model)]
-            fits.append(fit_effects(model, readings, chosen + [eff], starts=starts))
+                if len(chosen) == 1 and rivals_pairs:
+                    # a pair that can neither pass the BIC margin nor matter as a rival is not fitted to the end
+                    k = len(starts[0])
+                    pen = sum(getattr(e, "penalty", 0.0) for e in chosen + [eff])
+                    accept = cur_fit.bic - bic_margin - k * np.log(n_total) - pen
+                    prior = _size_prior(len(pool))
+                    rivals_best = _best_total([evidence.Explanation((), base.chi2, 0, base)]
+                                              + [_explanation(f) for ids, f in known.items() if len(ids) == 1],
+                                              n_total, prior)
+                    stop = max(accept, _hopeless_pair(rivals_best, k, prior))
+            fits.append(fit_effects(model, readings, chosen + [eff], starts=starts, stop_above=stop))
             known[frozenset(fits[-1].ids)] = fits[-1]
         fits.sort(key=lambda f: f.bic)
         rows = [{"round": rnd + 1, "effects": list(f.ids), "chi2": f.chi2, "bic": f.bic, "delta_bic": cur_fit.bic - f.bic}
@@ -316,7 +374,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     if not any(set(ex.ids) == set(greedy_ids) for ex in rivals):   # e.g. three effects named
         rivals.append(_explanation(cur_fit))
     # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
-    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
+    w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof,
+                       method=evidence_method)
     if greedy_ids and w.probability[0] < 0.01:
         # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
         lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
@@ -325,7 +384,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         chosen, cur_fit = list(lead.payload.effects), lead.payload
         cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
         greedy_ids = tuple(e.id for e in chosen)
-        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof)
+        w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof,
+                       method=evidence_method)
     # structured lack of fit (femcheck.diagnose.lack_of_fit): a compliance-shaped residual that the overall chi^2
     # spreads over all readings. The verdict turns unexplained only when the named explanation *and* the best
     # explanation of the vocabulary (the evidence leader) both leave one: an effect below the held-out selection's

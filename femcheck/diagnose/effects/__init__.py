@@ -26,6 +26,12 @@ class Param:
     doc: str = ""
     #: the value meaning "no effect" (e.g. a leg factor 1, a gap 0): sitting on a bound there is no symptom
     neutral: float | None = None
+    #: prior of the Laplace evidence (``femcheck.diagnose.prior``): a normal in the optimizer's scaled coordinate
+    #: x = to_x(value) with standard deviation ``prior_sd`` (decades for log parameters, units of ``typical``
+    #: otherwise), centred on ``prior_center`` (natural units; None = the effect's neutral value for the model),
+    #: truncated to [lower, upper]. The calibration bench draws its hidden truths from the same prior.
+    prior_sd: float = 1.0
+    prior_center: float | None = None
 
     def to_x(self, v):
         return np.log10(v) if self.log else np.asarray(v) / self.typical

@@ -14,7 +14,8 @@ from femcheck.diagnose.model import ACT
 class ActuationCompliance(Effect):
     id = "actuation_compliance"
     stage = 1
-    params = (Param("scale", 0.0, 30.0, 1.0, doc="actuation compliance / modelled cable + motor compliance"),)
+    params = (Param("scale", 0.0, 30.0, 1.0, prior_sd=1.0,
+                    doc="actuation compliance / modelled cable + motor compliance"),)
 
     def applicable(self, model):
         # on a level that lacks the drive and the joints (simplified) their omission is one cause,

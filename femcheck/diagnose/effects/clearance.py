@@ -18,10 +18,10 @@ _AXES = "xyz"
 class Clearance(Effect):
     id = "clearance"
     stage = 5
-    params = (Param("gap_x_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, doc="dead band along x, m"),
-              Param("gap_y_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, doc="dead band along y, m"),
-              Param("gap_z_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, doc="dead band along z, m"),
-              Param("closing_force_N", 0.2, 50.0, 4.0, typical=1.0, doc="F_c, force that closes 63 % of the gap"))
+    params = (Param("gap_x_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, prior_sd=5.0, doc="dead band along x, m"),
+              Param("gap_y_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, prior_sd=5.0, doc="dead band along y, m"),
+              Param("gap_z_m", 0.0, 1e-3, 2e-5, typical=1e-5, neutral=0.0, prior_sd=5.0, doc="dead band along z, m"),
+              Param("closing_force_N", 0.2, 50.0, 4.0, typical=1.0, prior_sd=4.0, doc="F_c, force that closes 63 % of the gap"))
 
     def neutral(self, model):
         return np.array([0.0, 0.0, 0.0, 4.0])

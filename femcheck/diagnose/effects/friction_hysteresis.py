@@ -13,7 +13,7 @@ from femcheck.diagnose.effects import Effect, Param
 class FrictionHysteresis(Effect):
     id = "friction_hysteresis"
     stage = 0
-    params = (Param("friction_N", 0.0, 60.0, 2.0, typical=5.0, neutral=0.0, doc="friction force reflected to the TCP, N"),)
+    params = (Param("friction_N", 0.0, 60.0, 2.0, typical=5.0, neutral=0.0, prior_sd=2.0, doc="friction force reflected to the TCP, N"),)
 
     def neutral(self, model):
         return np.array([0.0])

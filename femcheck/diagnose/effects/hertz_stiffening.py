@@ -20,7 +20,7 @@ _F_FLOOR_N = 0.5   # the model's own floor of the Hertz linearization force (min
 class HertzStiffening(Effect):
     id = "hertz_stiffening"
     stage = 2
-    params = (Param("extra_compliance_at_ref", 0.0, 40.0, 1.0, neutral=0.0, doc="a: extra joint compliance at F_ref / modelled"),)
+    params = (Param("extra_compliance_at_ref", 0.0, 40.0, 1.0, neutral=0.0, prior_sd=4.0, doc="a: extra joint compliance at F_ref / modelled"),)
 
     def neutral(self, model):
         return np.array([0.0])

@@ -15,7 +15,7 @@ from femcheck.diagnose.model import SP, UJ
 class JointContactCompliance(Effect):
     id = "joint_contact_compliance"
     stage = 1
-    params = (Param("scale", 0.0, 30.0, 1.0, doc="joint compliance / modelled contact compliance"),)
+    params = (Param("scale", 0.0, 30.0, 1.0, prior_sd=2.0, doc="joint compliance / modelled contact compliance"),)
 
     def applicable(self, model):
         # on a level that lacks the drive and the joints (simplified) their omission is one cause,

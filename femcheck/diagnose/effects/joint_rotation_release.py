@@ -12,7 +12,8 @@ from femcheck.diagnose.effects import Effect, Param
 class JointRotationRelease(Effect):
     id = "joint_rotation_release"
     stage = 4
-    params = (Param("compliance_rad_per_Nm", 1e-5, 1e3, 1e-2, log=True, doc="passive joint rotation compliance c"),)
+    params = (Param("compliance_rad_per_Nm", 1e-5, 1e3, 1e-2, log=True, prior_sd=1.0,
+                    prior_center=0.1, doc="passive joint rotation compliance c"),)
 
     def neutral(self, model):
         return np.array([0.0])

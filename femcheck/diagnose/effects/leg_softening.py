@@ -15,7 +15,7 @@ _SOFT_MARGIN = 1.05   # a leg counts as softened if its factor's lower 95 % boun
 class LegSoftening(Effect):
     id = "leg_softening"
     stage = 3
-    params = tuple(Param(f"leg{i}", 1.0, 20.0, 1.1, neutral=1.0, doc=f"compliance factor of chain {i}") for i in range(6))
+    params = tuple(Param(f"leg{i}", 1.0, 20.0, 1.1, neutral=1.0, prior_sd=2.0, doc=f"compliance factor of chain {i}") for i in range(6))
 
     def neutral(self, model):
         return np.ones(6)

@@ -13,7 +13,7 @@ from femcheck.diagnose.model import LG, PROX
 class LinkModulus(Effect):
     id = "link_modulus"
     stage = 3
-    params = (Param("E_factor", 0.1, 10.0, 1.0, log=True, doc="true / assumed Young's modulus of the links"),)
+    params = (Param("E_factor", 0.1, 10.0, 1.0, log=True, prior_sd=0.25, doc="true / assumed Young's modulus of the links"),)
 
     def neutral(self, model):
         return np.array([1.0])

@@ -27,10 +27,10 @@ _COLUMNS = (ACT, SP, UJ)
 class MissingCompliance(Effect):
     id = "missing_compliance"
     stage = 1
-    params = (Param("actuation_scale", 0.0, 30.0, 1.0, neutral=0.0, doc="added drive compliance / the case's formula"),
-              Param("spherical_joint_scale", 0.0, 30.0, 1.0, neutral=0.0,
+    params = (Param("actuation_scale", 0.0, 30.0, 1.0, neutral=0.0, prior_sd=1.0, doc="added drive compliance / the case's formula"),
+              Param("spherical_joint_scale", 0.0, 30.0, 1.0, neutral=0.0, prior_sd=1.0,
                     doc="added spherical-joint (Hertz point contact) compliance / the case's formula"),
-              Param("universal_joint_scale", 0.0, 30.0, 1.0, neutral=0.0,
+              Param("universal_joint_scale", 0.0, 30.0, 1.0, neutral=0.0, prior_sd=1.0,
                     doc="added universal-joint (line contact) compliance / the case's formula"))
 
     def applicable(self, model) -> bool:

@@ -12,7 +12,7 @@ from femcheck.kinematics.frames import rotvec_to_matrix
 class SensorMisalignment(Effect):
     id = "sensor_misalignment"
     stage = 9
-    params = tuple(Param(f"theta_{a}_rad", -0.6, 0.6, 0.0, typical=0.05, neutral=0.0, doc=f"dial frame rotation about {a}")
+    params = tuple(Param(f"theta_{a}_rad", -0.6, 0.6, 0.0, typical=0.05, neutral=0.0, prior_sd=3.0, doc=f"dial frame rotation about {a}")
                    for a in "xyz")
 
     def neutral(self, model):
