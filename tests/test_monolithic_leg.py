@@ -71,6 +71,33 @@ def test_part_sizes_follow_the_mesh_level(case):
         ml.part_sizes(case, "huge")
 
 
+def _hub_tie_half_length(pm, centre):
+    """Largest |x − centre| of the uj_hub tie nodes on pin a1's axis plane (pin a1 lies along x)."""
+    x = pm.points[pm.regions["uj_hub"].nodes] - centre
+    return float(np.abs(x[np.abs(x[:, 1]) < 1e-9, 0]).max())
+
+
+def test_leg_universal_joint_is_the_joint_fe_mesh_and_ties_the_whole_hub(case):
+    """The monolithic leg meshes its universal joint as the joint FE does at the same level: the rigid hub
+    ties exactly ±hub_half_length_m (hub ends are element levels; the 2 mm mesh without them tied ±1.8 mm
+    only, a ≈ 7 % stiffer joint), and the nodes are the joint FE's mesh moved to C (same mesh, so the
+    joints' own discretisation cannot differ between the two leg models)."""
+    from femcheck.fe_device.joint_fe import level_mesh_options
+    from geometry import universal_joint
+    load = ml.leg_load(case, "P0")
+    C = np.array([0.0, 0.0, case.geometry.proximal_link_length_m])
+    (pm,) = ml.place_bodies(case, load, ml.part_sizes(case, "coarse"), bodies=("universal_joint",), mesh="coarse")
+    hub = float(case.solid.universal_joint.hub_half_length_m)
+    assert _hub_tie_half_length(pm, C) == pytest.approx(hub, abs=1e-12)  # exact: the hub ends are mesh levels
+    size, opts = level_mesh_options(case, "universal", "coarse", max(load.loads_N))
+    assert opts["hub_levels"] is True
+    ref = universal_joint.build(case, size, **opts)
+    assert pm.points.shape == ref.points.shape and np.allclose(pm.points - C, ref.points, rtol=0, atol=1e-15)
+    # the same mesh without the hub levels (what the leg used before): the tie falls short of the hub ends
+    short = universal_joint.build(case, size, **{**opts, "hub_levels": False})
+    assert _hub_tie_half_length(short, np.zeros(3)) < 0.95 * hub
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("point", ["P0", "P5"])
 def test_monolithic_leg_agrees_with_substructured_leg(case, point):

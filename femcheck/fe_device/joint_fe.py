@@ -115,6 +115,24 @@ def _mesh_size(case, joint: str, mesh: str) -> float:
     return MESH_FACTORS[mesh] * base
 
 
+def level_mesh_options(case, joint: str, mesh: str = "coarse", max_load_N: float | None = None) -> tuple:
+    """The joint's mesh at a level, as ``build_joint`` meshes it: (bulk size (m), keyword options of
+    ``geometry.spherical_joint.build`` / ``geometry.universal_joint.build``) from
+    :func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes` (the ball: contact edge a / k on a disc of 1.3 a;
+    the pins: warped angles, axial element length, radial contact edge, hub ends as element levels). The
+    monolithic leg (:mod:`femcheck.fe_device.monolithic_leg`) meshes its joints with the same options."""
+    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
+
+    if joint not in JOINTS:
+        raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)} or all")
+    _mesh_size(case, joint, mesh)  # the level's named error
+    ms = joint_mesh_sizes(case, joint, mesh, max_load_N)
+    if joint == "spherical":
+        return ms.bulk_m, {"contact_size_m": ms.contact_m, "contact_zone_radius_m": ms.zone_m, "grading": ms.grading}
+    return ms.bulk_m, ({"contact_warp": ms.contact_warp, "contact_size_m": ms.surface_m, "axial_size_m": ms.axial_m,
+                        "hub_levels": ms.hub_levels} if ms.contact_warp else {})
+
+
 #: penalty factor ε = factor E / h per joint: the ball in seat is stiffer (fewer Uzawa updates, the stick
 #: tangent within 1 % of the tied limit at a/4); the pins keep the value they were measured with
 PENALTY_FACTOR = {"spherical": 1000.0, "universal": 100.0}
@@ -123,16 +141,12 @@ PENALTY_FACTOR = {"spherical": 1000.0, "universal": 100.0}
 def _joint_mesh(case, joint: str, mesh: str, max_load_N, mesh_options):
     """The meshed joint and its contact set-up: (pm, mats, mu, held, coupled, pairs_spec, clearance) with
     ``mu`` the case's friction (build_joint overrides it when asked)."""
-    from femcheck.fe_device.mesh_levels import joint_mesh_sizes
-
     size = _mesh_size(case, joint, mesh)
     if joint == "spherical":
         from geometry import spherical_joint
         sj = case.spherical_joint
         if mesh_options is None:  # the graded level: contact edge a / k on a disc of 1.3 a, bulk unchanged
-            ms = joint_mesh_sizes(case, joint, mesh, max_load_N)
-            size = ms.bulk_m
-            mesh_options = {"contact_size_m": ms.contact_m, "contact_zone_radius_m": ms.zone_m, "grading": ms.grading}
+            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
         pm = spherical_joint.build(case, size, **mesh_options)
         mats = {"ball": sj.ball_material, "seat": sj.seat_material}
         mu = case.solid.spherical_joint.friction
@@ -142,10 +156,7 @@ def _joint_mesh(case, joint: str, mesh: str, max_load_N, mesh_options):
         from geometry import universal_joint
         uj = case.universal_joint
         if mesh_options is None:
-            ms = joint_mesh_sizes(case, joint, mesh, max_load_N)
-            size = ms.bulk_m
-            mesh_options = ({"contact_warp": ms.contact_warp, "contact_size_m": ms.surface_m, "axial_size_m": ms.axial_m,
-                             "hub_levels": ms.hub_levels} if ms.contact_warp else {})
+            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
         pm = universal_joint.build(case, size, **mesh_options)
         mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
         mu = case.solid.universal_joint.friction

@@ -10,6 +10,12 @@ the universal joint, CONVENTIONS.md §2):
 * link tube (``geometry.proximal_link``, B → C, length L2);
 * universal joint (``geometry.universal_joint``: platform yoke arms, cross pins, link yoke arms), at C.
 
+The two joints are meshed exactly as their contact FE meshes them at the same level
+(:func:`femcheck.fe_device.joint_fe.level_mesh_options`: the ball graded on the Hertz radius of the leg's
+largest force; the pins with warped angles, the level's axial element length and the hub ends as element
+levels, so the rigid hub ties exactly ±hub_half_length_m), and each contact pair takes its joint's penalty
+factor and exact-surface initial gaps, as in ``build_joint``.
+
 They form one P2 mesh (one global stiffness, materials per body) with three contact pairs (GPTS penalty,
 :func:`femcheck.fe.contact.pairing.pair_surfaces`): ball/seat, pin a1/platform bores, pin a2/link bores.
 Rigid parts are rigid couplings (RBE2) to reference nodes, exactly as in the substructured parts: the
@@ -46,8 +52,8 @@ with C_lg = K_lg⁻¹ (frame A, u_A = R_Aᵀ u_i) and c_link,zz the axial compli
 The compared quantity is the displacement of C_i along the leg at both force levels and its eq. 1
 increment δ(F20) − δ(F5); ``relative_difference`` is that of the increment.
 
-What this checks (and what it does not). Both models use the same meshes of every body, so the bodies'
-own compliances agree by construction. The difference measures what substructuring assumes: that each
+What this checks (and what it does not). Both models use the same meshes of every body (the joints' too)
+and the same contact set-up, so the bodies' own compliances agree by construction. The difference measures what substructuring assumes: that each
 joint FE's boundary conditions (seat and platform yoke clamped, node b held in its five other components)
 represent the joint inside the leg, where the seat moves with the bending guideway and the ball, link and
 cross are free to slide and roll in their frictionless contacts (the mechanisms carry no load).
@@ -137,8 +143,14 @@ def part_sizes(case, mesh: str) -> dict:
 
 
 def place_bodies(case, load: LegLoad, sizes: dict, bodies=("guideway", "spherical_joint", "proximal_link",
-                                                               "universal_joint")) -> list:
-    """The leg's part meshes moved into the link frame at B (module doc): list of ``PartMesh``."""
+                                                               "universal_joint"), mesh: str = "coarse") -> list:
+    """The leg's part meshes moved into the link frame at B (module doc): list of ``PartMesh``.
+
+    The guideway and the link tube take ``sizes`` (:func:`part_sizes`); the two joints are meshed exactly
+    as their contact FE meshes them at level ``mesh`` (:func:`femcheck.fe_device.joint_fe.level_mesh_options`:
+    the ball graded on the Hertz radius of the leg's largest force, the pins with warped angles, the axial
+    element length and the hub ends as element levels, so the rigid hub ties exactly ±hub_half_length_m)."""
+    from femcheck.fe_device.joint_fe import level_mesh_options
     from geometry import guideway, proximal_link, spherical_joint, universal_joint
 
     L2 = case.geometry.proximal_link_length_m
@@ -148,11 +160,13 @@ def place_bodies(case, load: LegLoad, sizes: dict, bodies=("guideway", "spherica
             pm = guideway.build(case, sizes["guideway"], length_m=load.slider_m)
             out.append(pm.transformed(load.R_B.T @ load.R_A, load.R_B.T @ (load.A - load.B)))
         elif name == "spherical_joint":
-            out.append(spherical_joint.build(case, sizes["spherical_joint"]))
+            size, opts = level_mesh_options(case, "spherical", mesh, max(load.loads_N))
+            out.append(spherical_joint.build(case, size, **opts))
         elif name == "proximal_link":
             out.append(proximal_link.build(case, sizes["proximal_link"]))
         elif name == "universal_joint":
-            out.append(universal_joint.build(case, sizes["universal_joint"]).transformed(np.eye(3), np.array([0, 0, L2])))
+            size, opts = level_mesh_options(case, "universal", mesh, max(load.loads_N))
+            out.append(universal_joint.build(case, size, **opts).transformed(np.eye(3), np.array([0, 0, L2])))
         else:
             raise ValueError(f"unknown leg body {name!r}")
     return out
@@ -200,15 +214,20 @@ def assemble_leg(case, meshes, clamps, couplings: dict) -> LegAssembly:
     return LegAssembly(basis, K, ndof, refs, cs.combine(*sets), msh, time.perf_counter() - t0)
 
 
-def build_monolithic_leg(case, load: LegLoad, mesh: str = "coarse", *, penalty_factor: float = 100.0):
+def build_monolithic_leg(case, load: LegLoad, mesh: str = "coarse", *, penalty_factor: float | None = None,
+                         exact_gaps: bool = True):
     """Mesh, assemble, pair and condense the whole leg (module doc): a
-    :class:`femcheck.fe_device.joint_fe.CondensedJoint` named 'leg' whose reference node is C_p."""
+    :class:`femcheck.fe_device.joint_fe.CondensedJoint` named 'leg' whose reference node is C_p.
+
+    Each contact pair is set up as in its joint FE (``build_joint``): the penalty factor of its joint
+    (``joint_fe.PENALTY_FACTOR``, or ``penalty_factor`` for all pairs) and, with ``exact_gaps``, the initial
+    gaps measured to the exact ball and pin/bore surfaces (the U joint's shifted back to its centre C)."""
     from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
     from femcheck.fe_device import joint_fe as jf
 
     t0 = time.perf_counter()
     L2 = case.geometry.proximal_link_length_m
-    meshes = place_bodies(case, load, part_sizes(case, mesh))
+    meshes = place_bodies(case, load, part_sizes(case, mesh), mesh=mesh)
     uj_mesh = meshes[-1]
     C = np.array([0.0, 0.0, L2])
     couplings = {
@@ -221,17 +240,28 @@ def build_monolithic_leg(case, load: LegLoad, mesh: str = "coarse", *, penalty_f
     asm = assemble_leg(case, meshes, ("lg_clamp",), couplings)
     sj, uj = case.spherical_joint, case.universal_joint
     clearance = float(case.solid.universal_joint.pin_clearance_m)
-    spec = [("sj_seat_contact", "sj_ball_contact", sj.seat_material, case.solid.spherical_joint.friction),
-            ("uj_a1_bore_contact", "uj_a1_pin_contact", uj.bore_material, case.solid.universal_joint.friction),
-            ("uj_a2_bore_contact", "uj_a2_pin_contact", uj.bore_material, case.solid.universal_joint.friction)]
+    spec = [("sj_seat_contact", "sj_ball_contact", sj.seat_material, case.solid.spherical_joint.friction, "spherical"),
+            ("uj_a1_bore_contact", "uj_a1_pin_contact", uj.bore_material, case.solid.universal_joint.friction, "universal"),
+            ("uj_a2_bore_contact", "uj_a2_pin_contact", uj.bore_material, case.solid.universal_joint.friction, "universal")]
     pairs, h = [], []
-    for slave, master, mat, mu in spec:
+    for slave, master, mat, mu, joint in spec:
+        factor = jf.PENALTY_FACTOR[joint] if penalty_factor is None else float(penalty_factor)
         sf, mf = asm.mesh.boundaries[slave], asm.mesh.boundaries[master]
-        eps = default_penalty(asm.mesh, sf, mat.E_Pa, penalty_factor)
+        eps = default_penalty(asm.mesh, sf, mat.E_Pa, factor)
         pairs.append(pair_surfaces(asm.basis, sf, mf, penalty_n=eps, friction=mu, name=slave, ndof=asm.ndof))
-        h.append(float(np.min(mat.E_Pa * penalty_factor / eps)))
+        h.append(float(np.min(mat.E_Pa * factor / eps)))
+    if exact_gaps:  # the ball's before the check (as build_joint), the pins' after it (it measures their chords)
+        pairs[0] = jf._exact_sphere_gap(case, pairs[0])
     jf._check_gaps("spherical", pairs[:1], 0.0, h[0])
     jf._check_gaps("universal", pairs[1:], clearance, min(h[1:]))
+    if exact_gaps:
+        for k in (1, 2):
+            at_origin = dataclasses.replace(pairs[k], points=np.asarray(pairs[k].points, float) - C)
+            g0 = jf._exact_cylinder_gap(case, at_origin, k - 1).g0
+            # the exact cylinders differ from the facets by their chord error only (< c / 2, checked above)
+            if np.abs(g0 - pairs[k].g0).max() > 0.5 * clearance + 1e-12:
+                raise RuntimeError(f"{pairs[k].name}: exact gaps off the facet gaps by more than the chord error")
+            pairs[k] = dataclasses.replace(pairs[k], g0=g0)
     # candidates as in the joint FE: the Hertz patch of the ball; the loaded lines of the pins (the leg in
     # compression pushes the link yoke towards the platform: link bores a2 close on their first-contact
     # line, the cross lifts and the platform bores a1 close on their opposite line, across 2c)
@@ -398,9 +428,10 @@ def check_monolithic_leg(case, point: str = "P0", mesh: str = "coarse", chain: i
     seconds = time.perf_counter() - t0
     log.info("monolithic leg %s chain %d: %d DOFs, %d retained, %d iterations, %.1f s", load.point, load.chain,
              model.dofs, model.retained, r.iterations, seconds)
+    size = (model.dofs, model.free_dofs, model.retained, model.contact_points, model.candidate_points)
+    factorizations, condense_s = r.factorizations + model.factorizations, model.condense_s
+    del model  # its body factorizations (the interior recovery): free them before the joint FE solves
     sub = substructured_leg(case, load, mesh)
-    return MonolithicLegResult(load, mesh, np.asarray(r.axial_m), sub.displacement_m, model.dofs, model.free_dofs,
-                               model.retained, model.contact_points, model.candidate_points, r.closed_points,
-                               r.iterations, r.factorizations + model.factorizations, r.augmentations,
-                               r.line_search_cuts, r.stabilization_force_share, r.residual_rel, model.condense_s,
-                               seconds, sub)
+    return MonolithicLegResult(load, mesh, np.asarray(r.axial_m), sub.displacement_m, *size, r.closed_points,
+                               r.iterations, factorizations, r.augmentations, r.line_search_cuts,
+                               r.stabilization_force_share, r.residual_rel, condense_s, seconds, sub)
