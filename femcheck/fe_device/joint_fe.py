@@ -14,13 +14,15 @@ in the joint frame (spherical: z = seat normal; universal: frame B_i, z = link a
 
 Static condensation (why it converges). The monolithic solve carries every interior DOF through every
 contact iteration. Here the constrained stiffness K_q = Tᵀ K T is split into the DOFs the contact
-operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once (sparse
-direct, :func:`femcheck.fe.linear_solver.factorize`) and the Schur complement
+operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once and the
+Schur complement
 
     S = K_rr − K_ri K_ii⁻¹ K_ir                               (exact for the linear bodies)
 
-is formed with multi-right-hand-side back-substitutions, one factorization per body (K_ii is block
-diagonal: the bodies meet only at retained contact DOFs). The contact iterations (status changes,
+comes from PARDISO's partial factorization, or (no MKL) from multi-right-hand-side back-substitutions
+with one factorization per body (K_ii is block diagonal: the bodies meet only at retained contact DOFs);
+the same factorization recovers the interior after the contact solve
+(:func:`femcheck.fe.schur_complement.condense`). The contact iterations (status changes,
 Uzawa updates, refactorizations) then run on the small dense S only, as Newton on the convex contact
 energy with an exact line search (no active-set chattering; a cross floating in its 2c clearance is
 seated in one step). The initial active set is the one the Hertz patch predicts: every candidate point
