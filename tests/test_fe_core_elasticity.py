@@ -76,6 +76,12 @@ def test_vectorized_assembly_is_the_weak_form_to_round_off(order):
     assert x @ (K @ x) == pytest.approx(x @ (K0 @ x), rel=1e-12)
     with pytest.raises(ValueError, match="assembly method"):
         assemble_stiffness(basis, E, NU, method="fast")
+    # the consistent mass the same way: same matrix as the weak form, per-element density
+    rho = rng.uniform(2700.0, 7800.0, nel)
+    M = assemble_mass(basis, rho)
+    M0 = assemble_mass(basis, rho, method="skfem")
+    assert abs(M - M0).max() <= 1e-12 * abs(M0).max()
+    assert abs(M - M.T).max() == 0.0
 
 
 def test_von_mises_uniaxial_and_two_material_bar():

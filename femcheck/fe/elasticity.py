@@ -147,13 +147,13 @@ def _element_stiffness(G, dx, lam, mu) -> np.ndarray:
     G (3, n_loc, n_e, n_qp) mapped gradients (1/m), dx (n_e, n_qp) quadrature weight × |det J| (m³),
     lam / mu (n_e,) Pa. M_cd = Σ_q w ∂_c φ_a ∂_d φ_b is formed for c ≤ d only (M_dc = M_cdᵀ); the result
     is averaged with its transpose, so K is exactly symmetric."""
-    H = G * np.sqrt(dx)[None, None]
-    H = np.ascontiguousarray(H.transpose(0, 2, 3, 1))  # (c, e, q, a)
-    ne, nloc = H.shape[1], H.shape[3]
+    Gt = np.ascontiguousarray(G.transpose(0, 2, 3, 1))  # (c, e, q, a)
+    W = Gt * dx[None, :, :, None]  # quadrature weights may be negative (no square roots)
+    ne, nloc = Gt.shape[1], Gt.shape[3]
     M = np.empty((3, 3, ne, nloc, nloc))
     for c in range(3):
         for d in range(c, 3):
-            M[c, d] = np.matmul(H[c].transpose(0, 2, 1), H[d])
+            M[c, d] = np.matmul(W[c].transpose(0, 2, 1), Gt[d])
             if d != c:
                 M[d, c] = M[c, d].transpose(0, 2, 1)
     lap = M[0, 0] + M[1, 1] + M[2, 2]
@@ -189,14 +189,39 @@ def _scatter_blocks(data, position, Ke) -> None:
             data[3 * c + d] += np.bincount(position, weights=Ke[c, d].reshape(-1), minlength=nb)
 
 
-def assemble_mass(basis, density) -> sp.csr_matrix:
+def assemble_mass(basis, density, *, method: str = "vectorized") -> sp.csr_matrix:
     """Consistent mass M (basis.N × basis.N, kg); density (kg/m³) scalar or per-element (n_elements,).
 
     Integrated with a quadrature of order 2·p (exact for straight-sided tets), whatever ``basis`` uses.
+    ``method="vectorized"``: M[a c, b d] = δ_cd ρ_e Σ_q w_q |J| φ_a φ_b in batches, summed into the block
+    pattern of :func:`assemble_stiffness`; ``"skfem"``: ``skfem.asm`` of :func:`_mass_form` (reference).
     """
+    if method not in METHODS:
+        raise ValueError(f"assembly method = {method!r}; expected one of {', '.join(METHODS)}")
     p = 2 if basis.elem.elem.maxdeg >= 2 else 1
     mb = skfem.Basis(basis.mesh, basis.elem, intorder=2 * p)
-    return sp.csr_matrix(asm(_mass_form, mb, rho=_per_element(mb, density, "density")))
+    rho = _per_element(mb, density, "density")
+    if method == "skfem":
+        return sp.csr_matrix(asm(_mass_form, mb, rho=rho))
+    nodes, _ = _scalar_gradients(mb)
+    nloc, nel = nodes.shape
+    phi = np.stack([np.asarray(mb.basis[3 * a][0])[0] for a in range(nloc)], axis=2)  # (e, q, a)
+    n = mb.N // 3
+    indptr, indices, position = _block_pattern(nodes, n)
+    data = np.zeros((9, indices.size))
+    for e0 in range(0, nel, SCATTER_CHUNK):
+        sl = slice(e0, min(e0 + SCATTER_CHUNK, nel))
+        W = phi[sl] * (rho[sl, 0][:, None] * mb.dx[sl])[:, :, None]  # weights may be negative (order-4 rule)
+        Me = np.matmul(W.transpose(0, 2, 1), phi[sl])
+        Me = 0.5 * (Me + Me.transpose(0, 2, 1))  # exactly symmetric
+        m = np.bincount(position[e0 * nloc * nloc: sl.stop * nloc * nloc], weights=Me.reshape(-1),
+                        minlength=indices.size)
+        for c in range(3):
+            data[4 * c] += m
+    blocks = np.ascontiguousarray(data.T).reshape(-1, 3, 3)
+    M = sp.bsr_matrix((blocks, indices, indptr), shape=(3 * n, 3 * n)).tocsr()
+    M.eliminate_zeros()
+    return M
 
 
 def strain(basis, u) -> np.ndarray:
