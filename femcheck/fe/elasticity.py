@@ -148,7 +148,11 @@ def _element_stiffness(G, dx, lam, mu) -> np.ndarray:
     lam / mu (n_e,) Pa. M_cd = Σ_q w ∂_c φ_a ∂_d φ_b is formed for c ≤ d only (M_dc = M_cdᵀ); the result
     is averaged with its transpose, so K is exactly symmetric."""
     Gt = np.ascontiguousarray(G.transpose(0, 2, 3, 1))  # (c, e, q, a)
-    W = Gt * dx[None, :, :, None]  # quadrature weights may be negative (no square roots)
+    if np.all(dx > 0):  # symmetric split √w ∂φ · √w ∂φ (the stiffness rules of vector_basis)
+        Gt = Gt * np.sqrt(dx)[None, :, :, None]
+        W = Gt
+    else:  # a rule with negative weights: no square roots
+        W = Gt * dx[None, :, :, None]
     ne, nloc = Gt.shape[1], Gt.shape[3]
     M = np.empty((3, 3, ne, nloc, nloc))
     for c in range(3):
