@@ -35,3 +35,27 @@ def test_schur_complement_matches_the_dense_formula(method):
     assert np.abs(S - S_ref).max() <= 1e-10 * np.abs(S_ref).max()
     # each floating body's rigid mode (constant) survives condensation: S annihilates it
     assert np.abs(S[:, : r.size // 2].sum(axis=1)).max() <= 1e-10 * np.abs(S_ref).max()
+
+
+@pytest.mark.parametrize("method", ["blockwise", pytest.param("pardiso", marks=pytest.mark.skipif(
+    not pardiso_available(), reason="pypardiso/MKL not installed"))])
+def test_condensation_extends_the_retained_displacement_from_the_same_factorization(method):
+    from femcheck.fe.schur_complement import condense
+
+    K, r = _two_floating_bodies()
+    i = np.setdiff1d(np.arange(K.shape[0]), r)
+    D = K.toarray()
+    u_r = np.random.default_rng(3).standard_normal(r.size)
+    q_ref = -np.linalg.solve(D[np.ix_(i, i)], D[np.ix_(i, r)] @ u_r)
+    c = condense(K, r, method=method)
+    q = c.extend(u_r)
+    # interior equilibrium K_ii q_i + K_ir u_r = 0 to the round-off of the direct factorization
+    assert np.abs(q[i] - q_ref).max() <= 1e-10 * np.abs(q_ref).max()
+    assert np.array_equal(q[r], u_r)  # the retained part is the given displacement
+    # the reaction on the retained DOFs is S u_r (the definition of the Schur complement)
+    assert np.abs(K[r] @ q - c.S @ u_r).max() <= 1e-10 * np.abs(c.S @ u_r).max()
+    # one factorization serves S and the extension (PARDISO: one partial; blockwise: one per body)
+    assert c.factorizations == (1 if method == "pardiso" else 2)
+    c.free()
+    with pytest.raises(RuntimeError):
+        c.extend(u_r)

@@ -8,6 +8,12 @@ dense update *is* S, so no right-hand sides are back-substituted at all. Where p
 available, or PARDISO returns an error, the blockwise fallback factorizes K_ii and back-substitutes the
 retained columns (``BLOCK`` at a time). K_ii must be nonsingular; K_rr (and S) may be singular (floating
 bodies held only by their retained contact DOFs).
+
+:func:`condense` returns S together with the interior extension q_i = −K_ii⁻¹ K_ir u_r of a retained
+displacement (the recovery after a condensed contact solve) from the *same* factorization: PARDISO keeps
+its partial factorization LDLᵀ of K_ii and back-substitutes [0; u_r] (phase 333: the backward step with the
+retained part fixed at u_r gives x_i = −L_iiᵀ⁻¹ L_riᵀ u_r = −K_ii⁻¹ K_ir u_r); the blockwise path keeps its
+per-body factorizations. No second factorization of the interior is made.
 """
 from __future__ import annotations
 
@@ -28,24 +34,81 @@ def schur_complement(K, r: np.ndarray, *, method: str = "auto") -> np.ndarray:
     """(n_r, n_r) dense S of symmetric sparse ``K`` onto the sorted indices ``r`` (module doc).
 
     method: "auto" (PARDISO, else the fallback), "pardiso", "blockwise"."""
+    c = condense(K, r, method=method)
+    S = c.S
+    c.free()
+    return S
+
+
+class SchurCondensation:
+    """S = K_rr − K_ri K_ii⁻¹ K_ir (``S``, (n_r, n_r) dense) and the interior extension of a retained
+    displacement from the same factorization (:meth:`extend`). ``method`` "pardiso" | "blockwise";
+    ``factorizations`` made (PARDISO: 1, blockwise: one per body touching r); ``seconds`` wall time of S."""
+
+    def __init__(self, K, r, S, method: str, factorizations: int, seconds: float, extend_fn, free_fn=None):
+        self.n = K.shape[0]
+        self.r = r
+        self.S = S
+        self.method = method
+        self.factorizations = factorizations
+        self.seconds = seconds
+        self._extend = extend_fn
+        self._free = free_fn
+
+    def extend(self, u_r) -> np.ndarray:
+        """Full displacement q (n,) with q_r = u_r and K_ii q_i = −K_ir u_r (units of u_r)."""
+        u_r = np.asarray(u_r, dtype=np.float64)
+        if u_r.shape != (self.r.size,):
+            raise ValueError(f"retained displacement has shape {u_r.shape}; expected ({self.r.size},)")
+        if self._extend is None:
+            raise RuntimeError("the factorization of this Schur condensation was released (free())")
+        q = self._extend(u_r)
+        q[self.r] = u_r
+        return q
+
+    def free(self) -> None:
+        """Release the factorization (S stays)."""
+        if self._free is not None:
+            self._free()
+        self._free = self._extend = None
+
+    def __del__(self):
+        try:
+            self.free()
+        except Exception:  # interpreter shutdown
+            pass
+
+
+def condense(K, r: np.ndarray, *, method: str = "auto") -> SchurCondensation:
+    """S of symmetric sparse ``K`` onto the sorted indices ``r`` with its interior extension (module doc).
+
+    method: "auto" (PARDISO, else blockwise), "pardiso", "blockwise"."""
     K = sp.csr_matrix(K, dtype=np.float64)
     r = np.asarray(r, dtype=np.int64)
+    if method not in ("auto", "pardiso", "blockwise"):
+        raise ValueError(f"Schur complement method = {method!r}; expected auto, pardiso or blockwise")
     t0 = time.perf_counter()
+    if method == "auto":
+        from femcheck.fe.linear_solver import pardiso_available, preferred
+        if preferred() not in ("auto", "pardiso") or not pardiso_available():
+            method = "blockwise"  # the user's non-MKL choice, or no MKL: the fallback with that solver
     if method in ("auto", "pardiso"):
         try:
-            S = _pardiso_schur(K, r)
-            log.info("Schur complement %d -> %d with PARDISO in %.2f s", K.shape[0], r.size, time.perf_counter() - t0)
-            return S
+            S, ext, fre = _pardiso_schur(K, r)
+            dt = time.perf_counter() - t0
+            log.info("Schur complement %d -> %d with PARDISO in %.2f s", K.shape[0], r.size, dt)
+            return SchurCondensation(K, r, S, "pardiso", 1, dt, ext, fre)
         except (ImportError, OSError, RuntimeError) as exc:
             if method == "pardiso":
                 raise
             log.info("PARDISO Schur complement unavailable (%s); blockwise back-substitution", exc)
-    S = _blockwise_schur(K, r)
-    log.info("Schur complement %d -> %d blockwise in %.2f s", K.shape[0], r.size, time.perf_counter() - t0)
-    return S
+    S, ext, nfac = _blockwise_schur(K, r)
+    dt = time.perf_counter() - t0
+    log.info("Schur complement %d -> %d blockwise in %.2f s (%d factorizations)", K.shape[0], r.size, dt, nfac)
+    return SchurCondensation(K, r, S, "blockwise", nfac, dt, ext)
 
 
-def _pardiso_schur(K, r) -> np.ndarray:
+def _pardiso_schur(K, r):
     import pypardiso
 
     n, ns = K.shape[0], r.size
@@ -66,7 +129,7 @@ def _pardiso_schur(K, r) -> np.ndarray:
     err = ctypes.c_int32(0)
     P, D = ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(ctypes.c_double)
 
-    def call(phase):
+    def call(phase, b, x):
         solver._mkl_pardiso(solver.pt.ctypes.data_as(ctypes.POINTER(solver._pt_type[0])),
                             ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(1)),
                             ctypes.byref(ctypes.c_int32(-2)), ctypes.byref(ctypes.c_int32(phase)),
@@ -74,17 +137,33 @@ def _pardiso_schur(K, r) -> np.ndarray:
                             ja.ctypes.data_as(P), perm.ctypes.data_as(P), ctypes.byref(ctypes.c_int32(1)),
                             iparm.ctypes.data_as(P), ctypes.byref(ctypes.c_int32(0)), b.ctypes.data_as(D),
                             x.ctypes.data_as(D), ctypes.byref(err))
+        return err.value
 
-    call(12)
-    code = err.value
-    call(-1)  # release PARDISO's memory
+    code = call(12, b, x)
     if code != 0:
+        call(-1, b, x)  # release PARDISO's memory
         raise RuntimeError(f"PARDISO Schur complement: error {code}")
     S = x.reshape(ns, ns)
-    return 0.5 * (S + S.T)
+    S = 0.5 * (S + S.T)
+    del b, x
+
+    def extend(u_r):
+        # backward substitution of [0; u_r] through the partial factorization: x_i = −K_ii⁻¹ K_ir u_r
+        z = np.zeros(n)
+        z[r] = u_r
+        q = np.zeros(n)
+        code = call(333, z, q)
+        if code != 0:
+            raise RuntimeError(f"PARDISO interior back-substitution: error {code}")
+        return q
+
+    def free():
+        call(-1, np.zeros(1), np.zeros(1))
+
+    return S, extend, free
 
 
-def _blockwise_schur(K, r) -> np.ndarray:
+def _blockwise_schur(K, r):
     from scipy.sparse.csgraph import connected_components
 
     from femcheck.fe.linear_solver import factorize
@@ -98,16 +177,28 @@ def _blockwise_schur(K, r) -> np.ndarray:
     S = K[r][:, r].toarray()
     # K_ii block diagonal per body: factorize each block, back-substitute only the columns touching it
     ncomp, label = connected_components(Kii, directed=False)
+    facs = []
     for c in range(ncomp):
         ic = np.flatnonzero(label == c)
         Kir_c = sp.csc_matrix(Kir[ic])
         cols = np.flatnonzero(np.diff(Kir_c.indptr))
-        if cols.size == 0:
+        if cols.size == 0:  # a body the retained set does not touch: its interior stays at rest
             continue
         fac = factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")
+        facs.append((ic, fac))
         Kc = sp.csc_matrix(Kir_c[:, cols])
         Krc = sp.csr_matrix(Kc.T)
         for j in range(0, cols.size, BLOCK):
             X = fac.solve(Kc[:, j:j + BLOCK].toarray())
             S[np.ix_(cols, cols[j:j + BLOCK])] -= Krc @ X
-    return 0.5 * (S + S.T)
+
+    def extend(u_r):
+        y = Kir @ u_r
+        q = np.zeros(n)
+        qi = np.zeros(i.size)
+        for ic, fac in facs:
+            qi[ic] = -fac.solve(y[ic])
+        q[i] = qi
+        return q
+
+    return 0.5 * (S + S.T), extend, len(facs)

@@ -14,13 +14,15 @@ in the joint frame (spherical: z = seat normal; universal: frame B_i, z = link a
 
 Static condensation (why it converges). The monolithic solve carries every interior DOF through every
 contact iteration. Here the constrained stiffness K_q = Tᵀ K T is split into the DOFs the contact
-operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once (sparse
-direct, :func:`femcheck.fe.linear_solver.factorize`) and the Schur complement
+operators touch plus the reference node (set r) and the rest (set i); K_ii is factorized once and the
+Schur complement
 
     S = K_rr − K_ri K_ii⁻¹ K_ir                               (exact for the linear bodies)
 
-is formed with multi-right-hand-side back-substitutions, one factorization per body (K_ii is block
-diagonal: the bodies meet only at retained contact DOFs). The contact iterations (status changes,
+comes from PARDISO's partial factorization, or (no MKL) from multi-right-hand-side back-substitutions
+with one factorization per body (K_ii is block diagonal: the bodies meet only at retained contact DOFs);
+the same factorization recovers the interior after the contact solve
+(:func:`femcheck.fe.schur_complement.condense`). The contact iterations (status changes,
 Uzawa updates, refactorizations) then run on the small dense S only, as Newton on the convex contact
 energy with an exact line search (no active-set chattering; a cross floating in its 2c clearance is
 seated in one step). The initial active set is the one the Hertz patch predicts: every candidate point
@@ -138,6 +140,34 @@ def level_mesh_options(case, joint: str, mesh: str = "coarse", max_load_N: float
 PENALTY_FACTOR = {"spherical": 1000.0, "universal": 100.0}
 
 
+def _joint_mesh(case, joint: str, mesh: str, max_load_N, mesh_options):
+    """The meshed joint and its contact set-up: (pm, mats, mu, held, coupled, pairs_spec, clearance) with
+    ``mu`` the case's friction (build_joint overrides it when asked)."""
+    size = _mesh_size(case, joint, mesh)
+    if joint == "spherical":
+        from geometry import spherical_joint
+        sj = case.spherical_joint
+        if mesh_options is None:  # the graded level: contact edge a / k on a disc of 1.3 a, bulk unchanged
+            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
+        pm = spherical_joint.build(case, size, **mesh_options)
+        mats = {"ball": sj.ball_material, "seat": sj.seat_material}
+        mu = case.solid.spherical_joint.friction
+        held, coupled, pairs_spec = "sj_seat_mount", "sj_ball_link", [("sj_seat_contact", "sj_ball_contact", sj.seat_material)]
+        clearance = 0.0
+    else:
+        from geometry import universal_joint
+        uj = case.universal_joint
+        if mesh_options is None:
+            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
+        pm = universal_joint.build(case, size, **mesh_options)
+        mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
+        mu = case.solid.universal_joint.friction
+        held, coupled = "uj_platform_mount", "uj_link_mount"
+        pairs_spec = [(f"uj_a{k}_bore_contact", f"uj_a{k}_pin_contact", uj.bore_material) for k in (1, 2)]
+        clearance = float(case.solid.universal_joint.pin_clearance_m)
+    return pm, mats, mu, held, coupled, pairs_spec, clearance
+
+
 def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float | None = None,
                 friction: float | None = None, max_load_N: float | None = None,
                 mesh_options: dict | None = None, exact_gaps: bool = True) -> CondensedJoint:
@@ -152,30 +182,10 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
 
     if joint not in JOINTS:
         raise FemcheckError(f"--joint {joint!r}: expected one of {', '.join(JOINTS)} or all")
-    size = _mesh_size(case, joint, mesh)
     penalty_factor = PENALTY_FACTOR[joint] if penalty_factor is None else float(penalty_factor)
     t0 = time.perf_counter()
-    if joint == "spherical":
-        from geometry import spherical_joint
-        sj = case.spherical_joint
-        if mesh_options is None:  # the graded level: contact edge a / k on a disc of 1.3 a, bulk unchanged
-            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
-        pm = spherical_joint.build(case, size, **mesh_options)
-        mats = {"ball": sj.ball_material, "seat": sj.seat_material}
-        mu = case.solid.spherical_joint.friction if friction is None else friction
-        held, coupled, pairs_spec = "sj_seat_mount", "sj_ball_link", [("sj_seat_contact", "sj_ball_contact", sj.seat_material)]
-        clearance = 0.0
-    else:
-        from geometry import universal_joint
-        uj = case.universal_joint
-        if mesh_options is None:
-            size, mesh_options = level_mesh_options(case, joint, mesh, max_load_N)
-        pm = universal_joint.build(case, size, **mesh_options)
-        mats = {"pin": uj.pin_material, "yoke": uj.bore_material}
-        mu = case.solid.universal_joint.friction if friction is None else friction
-        held, coupled = "uj_platform_mount", "uj_link_mount"
-        pairs_spec = [(f"uj_a{k}_bore_contact", f"uj_a{k}_pin_contact", uj.bore_material) for k in (1, 2)]
-        clearance = float(case.solid.universal_joint.pin_clearance_m)
+    pm, mats, mu, held, coupled, pairs_spec, clearance = _joint_mesh(case, joint, mesh, max_load_N, mesh_options)
+    mu = mu if friction is None else friction
     msh = pm.to_skfem()
     basis = vector_basis(msh, 2)
     E, nu = _materials(pm, mats)
@@ -334,11 +344,8 @@ def _prune(B) -> sp.csr_matrix:
 def _condense(K, C, pairs, cand, ref_b):
     """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc;
     :func:`femcheck.fe.schur_complement.schur_complement`: PARDISO's own, else blockwise per body)."""
-    from scipy.sparse.csgraph import connected_components
-
     from femcheck.fe.constraints import pad
-    from femcheck.fe.linear_solver import factorize
-    from femcheck.fe.schur_complement import schur_complement
+    from femcheck.fe.schur_complement import condense
 
     T = C.T
     K = pad(sp.csr_matrix(K), C.ndof)
@@ -357,17 +364,10 @@ def _condense(K, C, pairs, cand, ref_b):
     n = Kq.shape[0]
     mask = np.zeros(n, bool)
     mask[touched] = True
-    r, i = np.flatnonzero(mask), np.flatnonzero(~mask)
-    Kii = sp.csr_matrix(Kq[i][:, i])
-    Kir = sp.csr_matrix(Kq[i][:, r])
-    S = schur_complement(Kq, r)
-    # K_ii is block diagonal per body (the bodies meet only at retained contact DOFs): one factorization
-    # per body, for the recovery of the interior after the contact solve
-    ncomp, label = connected_components(Kii, directed=False)
-    blocks = []
-    for c in range(ncomp):
-        ic = np.flatnonzero(label == c)
-        blocks.append((ic, factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")))
+    r = np.flatnonzero(mask)
+    # one factorization (PARDISO's partial one, or one per body) for S and for the recovery of the interior
+    cond = condense(Kq, r)
+    S = cond.S
     pos = np.full(n, -1)
     pos[r] = np.arange(r.size)
     red = [dataclasses.replace(p, B_n=sp.csr_matrix(bn[:, r]), B_t=sp.csr_matrix(bt[:, r]),
@@ -379,16 +379,10 @@ def _condense(K, C, pairs, cand, ref_b):
 
     def recover(u_r):
         """Gaps (m) of all contact points of every pair for a condensed displacement u_r (n_r,)."""
-        q = np.zeros(n)
-        q[r] = u_r
-        y = Kir @ u_r
-        qi = np.zeros(i.size)
-        for ic, fac in blocks:
-            qi[ic] = -fac.solve(y[ic])
-        q[i] = qi
+        q = cond.extend(u_r)
         return [p.g0 + b @ q for p, b in zip(pairs, Bn_all)]
 
-    return S, red, pos[ref_q], int(n), int(r.size), len(blocks) + 1, recover
+    return S, red, pos[ref_q], int(n), int(r.size), cond.factorizations, recover
 
 
 @dataclasses.dataclass(frozen=True)
