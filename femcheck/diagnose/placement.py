@@ -25,7 +25,9 @@ diagnosis):
    lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
    path can take one too many.
 
-The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates:
+The placements within ``margin`` of the best refined score (the diagnosis takes its ``max_located`` best; it refines
+at least three types, since the linear ranking can put the wrong type first) then enter the diagnosis as ordinary
+candidates:
 fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
 (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
 spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
