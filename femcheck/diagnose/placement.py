@@ -11,8 +11,10 @@ diagnosis):
 3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
    subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
    chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
-4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given); a type
-   whose lowest score is at all six legs is an all-legs change (e.g. ``actuation_compliance``) and is not located;
+4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given). A
+   lowest score at all six legs does not rule the type out (it once did, as "an all-legs change"): with the
+   prior's leg factors N(1, 1) a leg can be near rigid (0.03), far from the linearization at 1, and the six free
+   legs then always fit the linear model best; step 5 (at most five legs) decides;
 5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
    (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
    element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
@@ -23,7 +25,9 @@ diagnosis):
    lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
    path can take one too many.
 
-The placements within ``margin`` of the best refined score then enter the diagnosis as ordinary candidates:
+The placements within ``margin`` of the best refined score (the diagnosis takes its ``max_located`` best; it refines
+at least three types, since the linear ranking can put the wrong type first) then enter the diagnosis as ordinary
+candidates:
 fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
 (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
 spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
@@ -162,11 +166,12 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
         linear.append((best[0], eff, t_full, len(best[1])))
     linear.sort(key=lambda t: t[0])
     out = []
-    for score_lin, eff, t_full, n_legs in linear[:keep]:
+    for score_lin, eff, t_full, _n_legs in linear[:keep]:
         if score_lin > linear[0][0] + margin or score_lin >= chi2_0:
             break
-        if n_legs == 6:   # the element changed in every leg: its all-legs cause, not a located one
-            continue
+        # a linear minimum at all six legs is not an all-legs change: a leg scale far from 1 (a near-rigid element,
+        # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward
+        # selection decides, capped at five legs (six is the element's all-legs cause, weighed as its own effect)
         score, legs = _forward(model, readings, eff, chi2_0, ebic)   # 5. the legs, nonlinear
         if legs:
             out.append(Placement(eff.restricted(legs), score, chi2_0, t_full))

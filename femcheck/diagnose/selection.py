@@ -309,7 +309,11 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     chosen_ids = [c for c in (candidates or sorted(reg)) if c != "none" and reg[c].applicable(model)]
     pool = [reg[c] for c in chosen_ids if not reg[c].located]
     located = [reg[c] for c in chosen_ids if reg[c].located]
-    placements = screen_placements(model, readings, located, keep=max_located) if located and max_located > 0 else []
+    # the nonlinear leg choice refines the three linearly best element types (at least max_located): the linear
+    # ranking at scale 1 can put the wrong type first when a leg is far from 1 (e.g. a near-rigid guideway); the
+    # max_located best *refined* placements join the candidates
+    placements = (screen_placements(model, readings, located, keep=max(3, max_located))[:max_located]
+                  if located and max_located > 0 else [])
     pool += [p.effect for p in placements]
     folds = point_folds(readings, n_folds)
     base = fit_effects(model, readings, [])
