@@ -1,12 +1,13 @@
 """Dense Schur complement onto a retained set (femcheck.fe.schur_complement): PARDISO's own and the
-blockwise fallback agree with the dense formula, also when the retained block is singular."""
+CHOLMOD partial factorization (the non-MKL path) and the blockwise fallback agree with the dense formula,
+also when the retained block is singular."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from femcheck.fe.linear_solver import pardiso_available
+from femcheck.fe.linear_solver import cvxopt_available, pardiso_available
 from femcheck.fe.schur_complement import schur_complement
 
 
@@ -24,7 +25,8 @@ def _two_floating_bodies(m=12):
 
 
 @pytest.mark.parametrize("method", ["blockwise", pytest.param("pardiso", marks=pytest.mark.skipif(
-    not pardiso_available(), reason="pypardiso/MKL not installed"))])
+    not pardiso_available(), reason="pypardiso/MKL not installed")), pytest.param("cholmod", marks=pytest.mark.skipif(
+    not cvxopt_available(), reason="cvxopt (CHOLMOD) not installed"))])
 def test_schur_complement_matches_the_dense_formula(method):
     K, r = _two_floating_bodies()
     i = np.setdiff1d(np.arange(K.shape[0]), r)
@@ -38,7 +40,8 @@ def test_schur_complement_matches_the_dense_formula(method):
 
 
 @pytest.mark.parametrize("method", ["blockwise", pytest.param("pardiso", marks=pytest.mark.skipif(
-    not pardiso_available(), reason="pypardiso/MKL not installed"))])
+    not pardiso_available(), reason="pypardiso/MKL not installed")), pytest.param("cholmod", marks=pytest.mark.skipif(
+    not cvxopt_available(), reason="cvxopt (CHOLMOD) not installed"))])
 def test_condensation_extends_the_retained_displacement_from_the_same_factorization(method):
     from femcheck.fe.schur_complement import condense
 
@@ -54,8 +57,26 @@ def test_condensation_extends_the_retained_displacement_from_the_same_factorizat
     assert np.array_equal(q[r], u_r)  # the retained part is the given displacement
     # the reaction on the retained DOFs is S u_r (the definition of the Schur complement)
     assert np.abs(K[r] @ q - c.S @ u_r).max() <= 1e-10 * np.abs(c.S @ u_r).max()
-    # one factorization serves S and the extension (PARDISO: one partial; blockwise: one per body)
-    assert c.factorizations == (1 if method == "pardiso" else 2)
+    # PARDISO: one partial factorization serves S and the extension; blockwise: one per body for both;
+    # CHOLMOD: one constrained-order factorization for S, then one per body for the extension
+    assert c.factorizations == {"pardiso": 1, "blockwise": 2, "cholmod": 3}[method]
     c.free()
     with pytest.raises(RuntimeError):
         c.extend(u_r)
+
+
+def test_a_bad_non_mkl_schur_method_is_named(monkeypatch):
+    from femcheck.errors import FemcheckError
+    from femcheck.fe import linear_solver
+    from femcheck.fe.schur_complement import condense
+
+    K, r = _two_floating_bodies(4)
+    monkeypatch.setenv("FEMCHECK_SCHUR_METHOD", "lu")
+    monkeypatch.setattr(linear_solver, "pardiso_available", lambda: False)
+    with pytest.raises(FemcheckError, match="FEMCHECK_SCHUR_METHOD='lu'"):
+        condense(K, r)
+    # the named choice is taken: CHOLMOD's constrained-order factorization where cvxopt imports
+    monkeypatch.setenv("FEMCHECK_SCHUR_METHOD", "cholmod")
+    assert condense(K, r).method == ("cholmod" if cvxopt_available() else "blockwise")
+    monkeypatch.delenv("FEMCHECK_SCHUR_METHOD")
+    assert condense(K, r).method == "blockwise"  # the default without MKL: bounded memory
