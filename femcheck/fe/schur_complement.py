@@ -247,13 +247,14 @@ def _cholmod_schur(K, r):
     S[np.diag_indices(nr)] -= delta
     del Lrr
     # the extension: K_ii per body, factorized after the big factor is gone (memory), default ordering
-    extend, nfac = _interior_extension(K, r)
-    return 0.5 * (S + S.T), extend, nfac
+    extend, facs, _ = _interior_extension(K, r)
+    return 0.5 * (S + S.T), extend, len(facs)
 
 
 def _interior_extension(K, r):
     """q = [−K_ii⁻¹ K_ir u_r; 0] as a function of u_r, from one factorization per body of K_ii (K_ii is
-    block diagonal per body: the bodies meet only at retained DOFs); also the blocks, for reuse."""
+    block diagonal per body: the bodies meet only at retained DOFs). Returns (extend, bodies, K_ir) with
+    bodies = [(interior indices of the body, its factorization)] for reuse (:func:`_blockwise_schur`)."""
     from scipy.sparse.csgraph import connected_components
 
     from femcheck.fe.linear_solver import factorize
@@ -281,45 +282,19 @@ def _interior_extension(K, r):
         q[i] = qi
         return q
 
-    return extend, len(facs)
+    return extend, facs, Kir
 
 
 def _blockwise_schur(K, r):
-    from scipy.sparse.csgraph import connected_components
-
-    from femcheck.fe.linear_solver import factorize
-
-    n = K.shape[0]
-    mask = np.zeros(n, bool)
-    mask[r] = True
-    i = np.flatnonzero(~mask)
-    Kii = sp.csr_matrix(K[i][:, i])
-    Kir = sp.csr_matrix(K[i][:, r])
+    extend, facs, Kir = _interior_extension(K, r)
     S = K[r][:, r].toarray()
-    # K_ii block diagonal per body: factorize each block, back-substitute only the columns touching it
-    ncomp, label = connected_components(Kii, directed=False)
-    facs = []
-    for c in range(ncomp):
-        ic = np.flatnonzero(label == c)
+    # each body's factorization back-substitutes only the retained columns touching it
+    for ic, fac in facs:
         Kir_c = sp.csc_matrix(Kir[ic])
         cols = np.flatnonzero(np.diff(Kir_c.indptr))
-        if cols.size == 0:  # a body the retained set does not touch: its interior stays at rest
-            continue
-        fac = factorize(sp.csc_matrix(Kii[ic][:, ic]), "auto")
-        facs.append((ic, fac))
         Kc = sp.csc_matrix(Kir_c[:, cols])
         Krc = sp.csr_matrix(Kc.T)
         for j in range(0, cols.size, BLOCK):
             X = fac.solve(Kc[:, j:j + BLOCK].toarray())
             S[np.ix_(cols, cols[j:j + BLOCK])] -= Krc @ X
-
-    def extend(u_r):
-        y = Kir @ u_r
-        q = np.zeros(n)
-        qi = np.zeros(i.size)
-        for ic, fac in facs:
-            qi[ic] = -fac.solve(y[ic])
-        q[i] = qi
-        return q
-
     return 0.5 * (S + S.T), extend, len(facs)
