@@ -19,14 +19,16 @@ signed axis directions, no preload sweep, 3 trials, the case's noise and dial. E
 detailed model, every single effect and pair weighed) and, for each evidence approximation (``laplace`` and ``bic``,
 weighed on the same fits), every explanation's posterior probability is paired with whether it is the hidden one
 (explanation level), and every effect's marginal probability (the sum over the explanations that contain it) with
-whether it is hidden (cause level).
+whether it is hidden (cause level). Each is done for both likelihoods (``gauss``: sigma known; ``student``: sigma
+integrated out of its scatter estimate with ``sigma_dof`` dof, :func:`femcheck.diagnose.evidence.student_term`), also
+on the same fits; ``sigma_dof`` of each set is kept (0 when the dial quantum sets sigma: both likelihoods then agree).
 
 The reliability table bins the predicted probabilities and gives, per bin, the number of predictions, their
 mean and the observed frequency of being right, with a binomial standard error; ``ece`` is the expected
 calibration error (count-weighted mean |observed - predicted|), ``brier`` the mean squared error.
 
 ``python -m femcheck.bench.calibration [--sets 60] [--jobs 2] [--seed 0] [--truth prior|shrunk] [--pairs]
-[--out reports/diagnose/calibration.md]``
+[--likelihood gauss|student] [--out reports/diagnose/calibration.md]``
 """
 from __future__ import annotations
 
@@ -59,6 +61,10 @@ class GeneratedSet:
     seconds: float
     by_method: dict = dataclasses.field(default_factory=dict)
     truth: tuple = ()
+    #: degrees of freedom of the scatter estimate of sigma (``Readings.sigma_dof``; 0: the dial quantum sets it)
+    sigma_dof: int = 0
+    #: {likelihood: {method: explanations}} (``by_method`` is the entry of the weighing's likelihood)
+    by_likelihood: dict = dataclasses.field(default_factory=dict)
 
 
 def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
@@ -74,7 +80,8 @@ def shrunk_truth(effect, model, rng, case, shrink: float) -> dict:
     return out
 
 
-def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: int = 1) -> GeneratedSet:
+def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: int = 1,
+            likelihood: str | None = None) -> GeneratedSet:
     """Generate, simulate and diagnose set ``seed`` (module docstring); ``truth`` "prior" | "shrunk"; ``pairs`` (shrunk
     only): draw the hidden explanation from the diagnosis's size prior (none, single, pair 1/3 each) instead of none
     or one effect with equal chances; ``max_located``: placements of located effects that join the rivals."""
@@ -114,19 +121,23 @@ def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: 
     data = dc.replace(ve.data, **{f: getattr(ve.data, f)[keep] for f in
                                   ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
     t0 = time.perf_counter()
-    d = diagnose(model, process(data, case), with_baseline=False, max_located=max_located)
+    readings = process(data, case)
+    d = diagnose(model, readings, with_baseline=False, max_located=max_located, likelihood=likelihood)
     seconds = time.perf_counter() - t0
     from femcheck.diagnose import evidence
     w = d.weighing
-    by_method = {}
-    for m in evidence.EVIDENCE_METHODS:
-        p = evidence.posterior(w.explanations, w.n_data, m)
-        by_method[m] = tuple((tuple(sorted(e.ids)), float(q)) for e, q in zip(w.explanations, p))
+    by_likelihood = {}
+    for lik in evidence.LIKELIHOODS:
+        by_likelihood[lik] = {}
+        for m in evidence.EVIDENCE_METHODS:
+            p = evidence.posterior(w.explanations, w.n_data, m, lik, readings.sigma_dof)
+            by_likelihood[lik][m] = tuple((tuple(sorted(e.ids)), float(q)) for e, q in zip(w.explanations, p))
+    by_method = by_likelihood[w.likelihood]
     expl = by_method[w.method]
     causes = {c: float(sum(p for ids, p in expl if c in ids)) for c in pool}
     return GeneratedSet(seed=seed, hidden=tuple(h[0] for h in hidden), shrink=shrink, points=points,
                         directions=directions, explanations=expl, causes=causes, seconds=seconds, by_method=by_method,
-                        truth=tuple((h[0], tuple(sorted(h[1].items()))) for h in hidden))
+                        sigma_dof=int(readings.sigma_dof), by_likelihood=by_likelihood, truth=tuple((h[0], tuple(sorted(h[1].items()))) for h in hidden))
 
 
 def reliability(predicted, right, bins=BINS) -> dict:
@@ -167,12 +178,12 @@ def _tables(sets, key) -> dict:
 
 
 def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk",
-                max_located: int = 1) -> dict:
+                max_located: int = 1, likelihood: str | None = None) -> dict:
     """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
     tables of the default evidence (top level) and of each approximation (``by_method``), the sets and the wall time."""
     from femcheck.diagnose import evidence
     t0 = time.perf_counter()
-    args = [(s, pairs, truth, max_located) for s in range(seed, seed + n_sets)]
+    args = [(s, pairs, truth, max_located, likelihood) for s in range(seed, seed + n_sets)]
     if jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
         with ProcessPoolExecutor(jobs) as ex:
@@ -181,7 +192,11 @@ def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = Fa
         sets = [one_set(*a) for a in args]
     out = _tables(sets, lambda s: s.explanations)
     out["by_method"] = {m: _tables(sets, lambda s, m=m: s.by_method[m]) for m in evidence.EVIDENCE_METHODS}
+    out["by_likelihood"] = {lik: {m: _tables(sets, lambda s, m=m, lik=lik: s.by_likelihood[lik][m])
+                                  for m in evidence.EVIDENCE_METHODS} for lik in evidence.LIKELIHOODS}
+    out["sigma_dof_positive_fraction"] = float(np.mean([s.sigma_dof > 0 for s in sets])) if sets else float("nan")
     out.update(sets=sets, n_sets=n_sets, wall_s=time.perf_counter() - t0, default_method=evidence.EVIDENCE,
+               likelihood=likelihood or evidence.LIKELIHOOD,
                mean_diagnosis_s=float(np.mean([s.seconds for s in sets])) if sets else float("nan"))
     return out
 
@@ -189,12 +204,23 @@ def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = Fa
 def markdown(result: dict, command: str) -> str:
     """The reliability tables as Markdown, with the command that produced them."""
     out = [f"`{command}` ({result['n_sets']} sets, {result['wall_s']:.0f} s, mean diagnosis "
-           f"{result['mean_diagnosis_s']:.1f} s; default evidence {result['default_method']})", "",
+           f"{result['mean_diagnosis_s']:.1f} s; default evidence {result['default_method']}, likelihood "
+           f"{result.get('likelihood', 'gauss')})", "",
            "| evidence | explanation ECE | explanation Brier | cause ECE | cause Brier | leader ECE |", "|---|---|---|---|---|---|"]
     for m, t in result["by_method"].items():
         out.append(f"| {m} | {t['explanations']['ece']:.4f} | {t['explanations']['brier']:.4f} | {t['causes']['ece']:.4f} | "
                    f"{t['causes']['brier']:.4f} | {t['leader']['ece']:.4f} |")
     out.append("")
+    if "by_likelihood" in result:
+        out += [f"sigma from the trial scatter (sigma_dof > 0) on {result['sigma_dof_positive_fraction']:.0%} of the "
+                "sets; elsewhere the dial quantum sets sigma and both likelihoods agree", "",
+                "| evidence | likelihood | explanation ECE | explanation Brier | cause ECE | cause Brier | leader ECE |",
+                "|---|---|---|---|---|---|---|"]
+        for lik, by in result["by_likelihood"].items():
+            for m, t in by.items():
+                out.append(f"| {m} | {lik} | {t['explanations']['ece']:.4f} | {t['explanations']['brier']:.4f} | "
+                           f"{t['causes']['ece']:.4f} | {t['causes']['brier']:.4f} | {t['leader']['ece']:.4f} |")
+        out.append("")
     for m, t in result["by_method"].items():
         out += _markdown_tables(t, f" ({m})")
     return "\n".join(out + _markdown_wrong(result))
@@ -243,11 +269,15 @@ def main(argv=None) -> int:
                     help="draw the hidden truths from the evidence's prior (default) or shrink Effect.sample_truth")
     ap.add_argument("--max-located", type=int, default=1, help="placements of located effects weighed (diagnose's "
                     "max_located)")
+    ap.add_argument("--likelihood", choices=("gauss", "student"), default=None,
+                    help="likelihood of the diagnosis's own weighing (default femcheck.diagnose.evidence.LIKELIHOOD); "
+                         "both are tabulated from the same fits")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
-    res = calibration(a.sets, a.jobs, a.seed, a.pairs, a.truth, a.max_located)
+    res = calibration(a.sets, a.jobs, a.seed, a.pairs, a.truth, a.max_located, a.likelihood)
     cmd = (f"python -m femcheck.bench.calibration --sets {a.sets} --jobs {a.jobs} --seed {a.seed} --truth {a.truth}"
-           + (" --pairs" if a.pairs else "") + (f" --max-located {a.max_located}" if a.max_located != 1 else ""))
+           + (" --pairs" if a.pairs else "") + (f" --max-located {a.max_located}" if a.max_located != 1 else "")
+           + (f" --likelihood {a.likelihood}" if a.likelihood else ""))
     text = markdown(res, cmd)
     from femcheck.report.atomic import write_text_atomic
     write_text_atomic(a.out, text + "\n")

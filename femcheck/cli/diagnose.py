@@ -31,6 +31,10 @@ def register(app: typer.Typer) -> None:
         evidence: str = typer.Option(None, "--evidence", metavar="bic|laplace",
                                      help="evidence approximation of the posterior probabilities (default bic; "
                                           "docs/diagnose.md, calibration)"),
+        likelihood: str = typer.Option(None, "--likelihood", metavar="gauss|student",
+                                       help="likelihood of the evidence: gauss (sigma known) or student (sigma's "
+                                            "uncertainty from the trial scatter integrated out; default gauss; "
+                                            "docs/diagnose.md)"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -42,6 +46,9 @@ def register(app: typer.Typer) -> None:
         from femcheck.diagnose.evidence import EVIDENCE_METHODS
         if evidence is not None and evidence not in EVIDENCE_METHODS:
             raise typer.BadParameter(f"--evidence: {evidence!r}; expected one of {', '.join(EVIDENCE_METHODS)}")
+        from femcheck.diagnose.evidence import LIKELIHOODS
+        if likelihood is not None and likelihood not in LIKELIHOODS:
+            raise typer.BadParameter(f"--likelihood: {likelihood!r}; expected one of {', '.join(LIKELIHOODS)}")
         if json_out and json_out != "-":
             check_output_file(json_out, "--json")
         if report:
@@ -65,7 +72,8 @@ def register(app: typer.Typer) -> None:
         readings = process(data, case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         mismatch = device_mismatch_warnings(case, data.meta, readings, m)
-        d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence)
+        d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence,
+                     likelihood=likelihood)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
         result["warnings"] = list(result.get("warnings", [])) + mismatch
         if json_out == "-":

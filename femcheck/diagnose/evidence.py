@@ -19,7 +19,19 @@ returns
   - ``"bic"``: the Schwarz criterion ``-2 ln Z ~ chi^2_min + k ln N`` (Schwarz 1978; Kass & Raftery §4.1.3),
     the Laplace evidence's large-N limit with a unit-information prior;
 
-  an Explanation without the Laplace ingredients (``occam`` None) is weighed by BIC. The default (:data:`EVIDENCE`)
+  an Explanation without the Laplace ingredients (``occam`` None) is weighed by BIC;
+
+  and one of two likelihoods (``likelihood``, :data:`LIKELIHOOD`): ``"gauss"``, -2 ln L = chi^2 with sigma known,
+  or ``"student"`` (:func:`student_term`), which integrates sigma^2 out when it was estimated from the trial scatter
+  with nu = ``sigma_dof`` > 0 degrees of freedom (s^2 ~ sigma^2 chi^2_nu / nu; the scaled-inverse-chi^2 posterior
+  of sigma^2 given the scatter, Gelman et al., Bayesian Data Analysis 3rd ed. §3.2, §14; Box & Tiao 1973 §2.4). The
+  N weighted residuals are then multivariate Student-t with nu dof:
+  ``-2 ln L = (N + nu) ln(1 + chi^2 / nu) + const``, -> chi^2 + const as nu -> infinity, and the Gaussian limit is
+  used when ``sigma_dof`` = 0 (sigma from the dial quantum or stated). Differences between rivals with chi^2 ~ N
+  are almost unchanged; for misfits (chi^2 >> N) they are compressed. In the Laplace evidence the Hessian of the
+  negative log likelihood (N + nu)/2 ln(1 + chi^2(x)/nu) at its optimum (grad chi^2 = 0, Gauss-Newton
+  grad grad chi^2 = 2 J^T J) is c J^T J with ``c = (N + nu) / (nu + chi^2_min)`` (:func:`student_curvature`),
+  so A = J^T J becomes c A in :func:`laplace_score` (``FitResult.occam_student``). The default (:data:`EVIDENCE`)
   is ``"bic"``: on the calibration bench (``femcheck.bench.calibration``, 120 sets drawn from the Laplace prior) its
   cause marginals were the better calibrated (ECE 0.033 against 0.038; docs/diagnose.md);
 * the ambiguity between the named explanation and its strongest rival that is neither a sub- nor a
@@ -53,6 +65,44 @@ VERDICTS = ("none", "explained", "unexplained")
 EVIDENCE_METHODS = ("laplace", "bic")
 #: the default evidence approximation (the better calibrated on the calibration bench, docs/diagnose.md)
 EVIDENCE = "bic"
+LIKELIHOODS = ("gauss", "student")
+#: the default likelihood (docs/diagnose.md, "sigma's own uncertainty"): Gaussian with sigma known
+LIKELIHOOD = "gauss"
+
+
+def _check_likelihood(likelihood: str | None) -> str:
+    likelihood = likelihood or LIKELIHOOD
+    if likelihood not in LIKELIHOODS:
+        raise ValueError(f"likelihood {likelihood!r}; expected one of {', '.join(LIKELIHOODS)}")
+    return likelihood
+
+
+def student_term(chi2, n_data: int, sigma_dof: int):
+    """-2 ln L of N = ``n_data`` weighted residuals with sum of squares ``chi2`` when sigma^2 is integrated out
+    (module docstring): ``(N + nu) ln(1 + chi2 / nu)`` for nu = ``sigma_dof`` > 0, up to the constant
+    -2 ln Gamma((nu + N)/2) + 2 ln Gamma(nu/2) + N ln(nu pi s^2) shared by all rivals of the same data (the
+    multivariate Student-t density with nu dof and scale s^2 I, BDA3 §3.2 / A.1); ``chi2`` itself (the Gaussian
+    limit nu -> infinity) when ``sigma_dof`` = 0. Monotone in chi2; array ``chi2`` allowed."""
+    nu = int(sigma_dof)
+    if nu <= 0:
+        return chi2
+    out = (n_data + nu) * np.log1p(np.asarray(chi2, float) / nu)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def student_chi2(term: float, n_data: int, sigma_dof: int) -> float:
+    """Inverse of :func:`student_term` in chi2: the chi^2 whose Student-t -2 ln L is ``term``."""
+    nu = int(sigma_dof)
+    if nu <= 0:
+        return float(term)
+    return float(nu * np.expm1(min(term / (n_data + nu), 700.0)))
+
+
+def student_curvature(chi2: float, n_data: int, sigma_dof: int) -> float:
+    """c = (N + nu) / (nu + chi2): the Student-t negative log likelihood's Hessian at its optimum is c J^T J where the
+    Gaussian one is J^T J (module docstring); 1 for ``sigma_dof`` = 0."""
+    nu = int(sigma_dof)
+    return 1.0 if nu <= 0 else float((n_data + nu) / (nu + chi2))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,15 +119,24 @@ class Explanation:
     penalty: float = 0.0
     #: Laplace Occam term -2 ln Z - chi^2 (:func:`laplace_score`); None: weigh this explanation by BIC
     occam: float | None = None
+    #: Laplace Occam term of the Student-t likelihood, -2 ln Z - :func:`student_term` (:func:`laplace_score` with
+    #: ``curvature`` = :func:`student_curvature` for the readings' sigma_dof); None: use ``occam``
+    occam_student: float | None = None
 
-    def score(self, n_data: int, method: str | None = None) -> float:
-        """-2 ln (evidence) up to a constant shared by all explanations, plus the placement ``penalty``."""
+    def score(self, n_data: int, method: str | None = None, likelihood: str | None = None,
+              sigma_dof: int = 0) -> float:
+        """-2 ln (evidence) up to a constant shared by all explanations, plus the placement ``penalty``.
+        ``likelihood`` "gauss" | "student" (default :data:`LIKELIHOOD`); "student" with ``sigma_dof`` > 0 uses
+        :func:`student_term` in place of chi^2 (and ``occam_student`` for Laplace), the Gaussian limit otherwise."""
         method = method or EVIDENCE
         if method not in EVIDENCE_METHODS:
             raise ValueError(f"evidence method {method!r}; expected one of {', '.join(EVIDENCE_METHODS)}")
+        student = _check_likelihood(likelihood) == "student" and int(sigma_dof) > 0
+        lik = student_term(self.chi2, n_data, sigma_dof) if student else float(self.chi2)
         if method == "laplace" and (self.occam is not None or self.n_params == 0):
-            return float(self.chi2 + (self.occam or 0.0) + self.penalty)
-        return bic(self.chi2, self.n_params, n_data) + self.penalty
+            occam = self.occam_student if student and self.occam_student is not None else self.occam
+            return float(lik + (occam or 0.0) + self.penalty)
+        return bic(lik, self.n_params, n_data) + self.penalty
 
     @property
     def name(self) -> str:
@@ -113,7 +172,7 @@ def size_prior(explanations) -> np.ndarray:
 
 
 def laplace_score(chi2: float, jacobian: np.ndarray, x: np.ndarray, mu: np.ndarray, sd: np.ndarray,
-                  mass: np.ndarray | None = None, on_bound: np.ndarray | None = None) -> float:
+                  mass: np.ndarray | None = None, on_bound: np.ndarray | None = None, curvature: float = 1.0) -> float:
     """-2 ln Z of the Laplace approximation, up to the model-independent likelihood constant N ln 2 pi + 2 sum ln sigma.
 
     ``chi2``: chi^2 at the maximum-likelihood point ``x`` (k,) (scaled coordinates); ``jacobian`` (N, k) of the
@@ -125,12 +184,15 @@ def laplace_score(chi2: float, jacobian: np.ndarray, x: np.ndarray, mu: np.ndarr
     the second term the chi^2 + prior penalty at the maximum a posteriori point (one Gauss-Newton step from x), the
     third the posterior volume over the prior volume (the Occam factor; -> k ln N + O(1) for N data, i.e. BIC). Exact
     for a linear model with an untruncated prior. A parameter on its bound at the optimum (``on_bound``) keeps about
-    half of the Gaussian posterior mass: ln 2 each (the half-Gaussian Laplace approximation)."""
+    half of the Gaussian posterior mass: ln 2 each (the half-Gaussian Laplace approximation).
+
+    ``curvature`` c scales A to c A (the likelihood's Hessian); the Student-t likelihood passes
+    c = :func:`student_curvature` and its -2 ln L (:func:`student_term`) as ``chi2``."""
     J = np.asarray(jacobian, float)
     k = J.shape[1]
     if k == 0:
         return float(chi2)
-    A = J.T @ J
+    A = float(curvature) * (J.T @ J)
     P = np.diag(1.0 / np.asarray(sd, float) ** 2)
     d = np.asarray(x, float) - np.asarray(mu, float)
     quad = float(d @ (P - P @ np.linalg.solve(A + P, P)) @ d)
@@ -144,10 +206,12 @@ def laplace_score(chi2: float, jacobian: np.ndarray, x: np.ndarray, mu: np.ndarr
     return out
 
 
-def posterior(explanations, n_data: int, method: str | None = None) -> np.ndarray:
-    """(n,) posterior probabilities (``method`` "laplace" | "bic", default :data:`EVIDENCE`) with the size prior of
+def posterior(explanations, n_data: int, method: str | None = None, likelihood: str | None = None,
+              sigma_dof: int = 0) -> np.ndarray:
+    """(n,) posterior probabilities (``method`` "laplace" | "bic", default :data:`EVIDENCE`; ``likelihood`` "gauss" |
+    "student", default :data:`LIKELIHOOD`, with the readings' ``sigma_dof``) with the size prior of
     :func:`size_prior` (sum 1)."""
-    b = np.array([e.score(n_data, method) for e in explanations], float)
+    b = np.array([e.score(n_data, method, likelihood, sigma_dof) for e in explanations], float)
     w = np.exp(-0.5 * (b - b.min())) * size_prior(explanations)
     return w / w.sum()
 
@@ -170,6 +234,8 @@ class Weighing:
     ambiguous: bool
     ambiguity: str
     method: str = "bic"
+    likelihood: str = "gauss"
+    sigma_dof: int = 0
 
     @property
     def best(self) -> Explanation:
@@ -178,22 +244,25 @@ class Weighing:
     def alternatives(self, top: int = 10) -> list[dict]:
         return [{"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
                  "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
-                 "minus2_log_evidence": e.score(self.n_data, self.method)}
+                 "minus2_log_evidence": e.score(self.n_data, self.method, self.likelihood, self.sigma_dof)}
                 for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
 
 
 def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: float = ALPHA,
-          ambiguity_ratio: float = AMBIGUITY_RATIO, method: str | None = None) -> Weighing:
+          ambiguity_ratio: float = AMBIGUITY_RATIO, method: str | None = None,
+          likelihood: str | None = None) -> Weighing:
     """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals.
 
     ``chosen``: the ids of the explanation the caller names (e.g. after a held-out check); default the
-    posterior leader. The verdict is the goodness of fit of the named explanation."""
+    posterior leader. The verdict is the goodness of fit of the named explanation. ``likelihood``: "gauss" |
+    "student" (default :data:`LIKELIHOOD`; "student" integrates sigma out when ``sigma_dof`` > 0)."""
     ex = list(explanations)
     nones = [e for e in ex if not e.ids]
     if not nones:
         raise ValueError("weigh needs the no-effect explanation (ids == ()) among the rivals")
     method = method or EVIDENCE
-    p = posterior(ex, n_data, method)
+    likelihood = _check_likelihood(likelihood)
+    p = posterior(ex, n_data, method, likelihood, sigma_dof)
     order = np.argsort(-p, kind="stable")
     ex, p = [ex[i] for i in order], p[order]
     none = nones[0]
@@ -224,4 +293,4 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     text = (f"{ex[0].name} {p[0]:.2f} vs {ex[rival].name} {p[rival]:.2f}: not separable with these measurements"
             if ambiguous else "")
     return Weighing(tuple(ex), tuple(map(float, p)), int(n_data), verdict, c_b, p_b, c_n, p_n, frac, bool(ambiguous), text,
-                    method)
+                    method, likelihood, int(sigma_dof))

@@ -52,6 +52,10 @@ class FitResult:
     jacobian: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
     #: Laplace Occam term -2 ln Z - chi^2 with the prior of ``femcheck.diagnose.prior`` (fits of all states only)
     occam: float | None = None
+    #: Laplace Occam term of the Student-t likelihood (sigma integrated out, ``readings.sigma_dof`` > 0):
+    #: -2 ln Z - (N + nu) ln(1 + chi^2 / nu), the likelihood Hessian c J^T J with c = (N + nu) / (nu + chi^2)
+    #: (``femcheck.diagnose.evidence.student_curvature``); None when sigma_dof = 0 (the Gaussian limit applies)
+    occam_student: float | None = None
     #: True when the fit was stopped after its probe because even a full Gauss-Newton step could not bring it near
     #: the leading explanation (``stop_above``): its chi^2 is an upper bound and its posterior negligible
     stopped_early: bool = False
@@ -240,12 +244,18 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
     pred = predict_readings(model, readings, effects, _split(vals, effects))
     for w in warnings:
         log.info("fit %s: %s", "+".join(e.id for e in effects), w)
-    occam = None
+    occam, occam_student = None, None
     if mask.all():
-        from femcheck.diagnose.evidence import laplace_score
+        from femcheck.diagnose.evidence import laplace_score, student_curvature, student_term
         from femcheck.diagnose.prior import fit_prior
         pr = fit_prior(effects, model)
         occam = laplace_score(chi2, np.asarray(J), x, pr.mu, pr.sd, pr.mass, ~free) - chi2
+        nu = int(getattr(readings, "sigma_dof", 0) or 0)
+        if nu > 0:
+            t = student_term(chi2, n_data, nu)
+            occam_student = laplace_score(t, np.asarray(J), x, pr.mu, pr.sd, pr.mass, ~free,
+                                          curvature=student_curvature(chi2, n_data, nu)) - t
     return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
                      chi2, n_data, k, tuple(warnings), pred, nfev, on_bound,
-                     jacobian=np.asarray(J)[:, free] if mask.all() else None, occam=occam, stopped_early=stopped)
+                     jacobian=np.asarray(J)[:, free] if mask.all() else None, occam=occam, stopped_early=stopped,
+                     occam_student=occam_student)

@@ -40,6 +40,10 @@ EVIDENCE_TEXT = {
     "laplace": "Laplace: -2 ln p(D|M) ~ chi2 + d'(P - P(A+P)^-1 P)d + ln det(I + W A W) + 2 sum ln mass (A = J'J, "
                "parameter prior N(mu, W^2) of femcheck.diagnose.prior); prior: equal mass per explanation size (none, "
                "singles, pairs), shared within the size"}
+LIKELIHOOD_TEXT = {
+    "gauss": "Gaussian, sigma known: -2 ln L = chi2",
+    "student": "Student-t, sigma^2 integrated out of its scatter estimate with nu dof: -2 ln L = (N + nu) ln(1 + chi2/nu) "
+               "(Gaussian limit when nu = 0: sigma from the dial quantum or stated)"}
 #: |trial drift| / its standard error above which the readings drift with trial order (a finding)
 DRIFT_Z = 5.0
 
@@ -178,6 +182,7 @@ class Diagnosis:
                 "causes": [c.as_dict() for c in self.causes],
                 "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
                 "evidence": EVIDENCE_TEXT[w.method],
+                "likelihood": LIKELIHOOD_TEXT[w.likelihood], "sigma_dof": int(w.sigma_dof),
                 "residual": self.residual_json(),
                 "heldout_error_before": self.cv_before.error, "heldout_error_after": self.cv_after.error,
                 "heldout_error_along_load_before": self.cv_before.error_along,
@@ -224,16 +229,18 @@ def _lack_of_fit(readings, f: FitResult):
 
 def _explanation(f: FitResult) -> evidence.Explanation:
     return evidence.Explanation(f.ids, f.chi2, f.n_params, f, penalty=f.penalty,
-                                occam=f.occam if f.occam is not None else (0.0 if f.n_params == 0 else None))
+                                occam=f.occam if f.occam is not None else (0.0 if f.n_params == 0 else None),
+                                occam_student=f.occam_student)
 
 
 #: a rival pair whose chi^2 cannot come within this of the leader's -2 ln (prior x evidence) is not fitted to the end
-#: (posterior < exp(-HOPELESS / 2) = 2e-9 of the leader's, under either evidence approximation)
+#: (posterior < exp(-HOPELESS / 2) = 2e-9 of the leader's, under either evidence approximation and either likelihood)
 HOPELESS = 40.0
 
 
-def _total(ex: evidence.Explanation, n_data: int, prior: float, method: str) -> float:
-    return ex.score(n_data, method) - 2.0 * np.log(prior)
+def _total(ex: evidence.Explanation, n_data: int, prior: float, method: str, likelihood: str = "gauss",
+           sigma_dof: int = 0) -> float:
+    return ex.score(n_data, method, likelihood, sigma_dof) - 2.0 * np.log(prior)
 
 
 def _size_prior(n_pool: int) -> dict:
@@ -244,15 +251,36 @@ def _size_prior(n_pool: int) -> dict:
     return {0: 1.0 / n_sizes, 1: 1.0 / (n_sizes * max(n_pool, 1)), 2: 1.0 / (n_sizes * max(n_pairs, 1))}
 
 
-def _best_total(explanations, n_data: int, prior: dict) -> float:
-    """An upper bound, under every evidence approximation, of the best -2 ln (prior x evidence) among
-    ``explanations``."""
-    return max(min(_total(e, n_data, prior[len(e.ids)], m) for e in explanations) for m in evidence.EVIDENCE_METHODS)
+def _worst_total(ex: evidence.Explanation, n_data: int, prior: dict, sigma_dof: int) -> dict:
+    """{likelihood: the largest -2 ln (prior x evidence) of ``ex`` over the evidence approximations}."""
+    return {lik: max(_total(ex, n_data, prior[len(ex.ids)], m, lik, sigma_dof) for m in evidence.EVIDENCE_METHODS)
+            for lik in evidence.LIKELIHOODS}
 
 
-def _hopeless_pair(best: float, k: int, prior: dict) -> float:
-    """chi^2 above which a pair of ``k`` parameters cannot come within :data:`HOPELESS` of ``best``."""
-    return best + HOPELESS + 2.0 * k * np.log(2.0) + 2.0 * np.log(prior[2])
+def _best_total(explanations, n_data: int, prior: dict, sigma_dof: int = 0) -> dict:
+    """{likelihood: an upper bound, under every evidence approximation, of the best -2 ln (prior x evidence) among
+    ``explanations``} for each likelihood (Gaussian; Student-t with the readings' ``sigma_dof``)."""
+    return {lik: max(min(_total(e, n_data, prior[len(e.ids)], m, lik, sigma_dof) for e in explanations)
+                     for m in evidence.EVIDENCE_METHODS) for lik in evidence.LIKELIHOODS}
+
+
+def _hopeless_pair(best: dict, k: int, prior: dict, n_data: int = 0, sigma_dof: int = 0) -> float:
+    """chi^2 above which a pair of ``k`` parameters cannot come within :data:`HOPELESS` of ``best`` (per likelihood,
+    :func:`_best_total`) under any evidence approximation and either likelihood.
+
+    A pair's -2 ln (prior x evidence) is at least L(chi^2) - 2 k ln 2 - 2 ln prior_pair, L the likelihood term
+    (chi^2 for Gauss, (N + nu) ln(1 + chi^2 / nu) for Student-t; the Occam term is >= -2 k ln 2 under both evidence
+    approximations and both likelihoods, the placement penalty >= 0). L is increasing in chi^2, so the bound is the
+    inverse image L^-1(best + HOPELESS + 2 k ln 2 + 2 ln prior_pair) (:func:`femcheck.diagnose.evidence.student_chi2`),
+    and the stop threshold is the largest over the likelihoods (hopeless under both). Under Student-t the threshold is
+    *not* the Gaussian one: the transform compresses large chi^2, so a pair hopeless under Gauss can still matter."""
+    if not isinstance(best, dict):
+        best = {lik: float(best) for lik in evidence.LIKELIHOODS}
+    out = []
+    for lik, b in best.items():
+        term = b + HOPELESS + 2.0 * k * np.log(2.0) + 2.0 * np.log(prior[2])
+        out.append(evidence.student_chi2(term, n_data, sigma_dof) if lik == "student" else term)
+    return float(max(out))
 
 
 def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, known=None) -> list:
@@ -264,8 +292,9 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
 
     A pair fit is stopped after a short probe (``fit_effects(stop_above=...)``) when even a full Gauss-Newton step
     could not bring its chi^2 within :data:`HOPELESS` of the best -2 ln (prior x evidence) found so far, under either
-    evidence approximation (the Occam term of a pair is >= -2 k ln 2 under both): its posterior is then below
-    2e-9 of the leader's whatever its exact optimum, and its chi^2 is reported as reached."""
+    evidence approximation and either likelihood (the Occam term of a pair is >= -2 k ln 2 under all;
+    :func:`_hopeless_pair`): its posterior is then below 2e-9 of the leader's whatever its exact optimum, and its chi^2
+    is reported as reached."""
     known = known or {}
     n_data = 3 * readings.n_states
     out = [evidence.Explanation((), base.chi2, 0, base)]
@@ -276,7 +305,8 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
         out.append(_explanation(f))
     if pairs:
         prior = _size_prior(len(pool))
-        best = _best_total(out + [_explanation(f) for ids, f in known.items() if len(ids) == 2], n_data, prior)
+        nu = int(getattr(readings, "sigma_dof", 0) or 0)
+        best = _best_total(out + [_explanation(f) for ids, f in known.items() if len(ids) == 2], n_data, prior, nu)
         for i, first in enumerate(pool):
             for second in pool[i + 1:]:
                 f = known.get(frozenset([first.id, second.id]))
@@ -285,22 +315,27 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
                     a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
                     start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
                     f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100,
-                                    stop_above=_hopeless_pair(best, len(start), prior))
+                                    stop_above=_hopeless_pair(best, len(start), prior, n_data, nu))
                 ex = _explanation(f)
                 out.append(ex)
-                best = min(best, max(_total(ex, n_data, prior[2], m) for m in evidence.EVIDENCE_METHODS))
+                worst = _worst_total(ex, n_data, prior, nu)
+                best = {lik: min(best[lik], worst[lik]) for lik in best}
     return out
 
 
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
-             max_located: int = 1, evidence_method: str | None = None) -> Diagnosis:
+             max_located: int = 1, evidence_method: str | None = None, likelihood: str | None = None) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
-    candidates. ``evidence_method``: "laplace" | "bic" (default :data:`femcheck.diagnose.evidence.EVIDENCE`)."""
+    candidates. ``evidence_method``: "laplace" | "bic" (default :data:`femcheck.diagnose.evidence.EVIDENCE`);
+    ``likelihood``: "gauss" | "student" (default :data:`femcheck.diagnose.evidence.LIKELIHOOD`; "student" integrates
+    sigma out when ``readings.sigma_dof`` > 0)."""
     if evidence_method is not None and evidence_method not in evidence.EVIDENCE_METHODS:
         raise ValueError(f"evidence_method: {evidence_method!r}; expected one of {', '.join(evidence.EVIDENCE_METHODS)}")
+    if likelihood is not None and likelihood not in evidence.LIKELIHOODS:
+        raise ValueError(f"likelihood: {likelihood!r}; expected one of {', '.join(evidence.LIKELIHOODS)}")
     if readings.n_cases == 0 or len(set(readings.case_point)) < 2:
         from femcheck.errors import MeasuredDataError
         raise MeasuredDataError(readings.source, None, "point", "a diagnosis needs preload and total readings at two or "
@@ -340,8 +375,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                     prior = _size_prior(len(pool))
                     rivals_best = _best_total([evidence.Explanation((), base.chi2, 0, base)]
                                               + [_explanation(f) for ids, f in known.items() if len(ids) == 1],
-                                              n_total, prior)
-                    stop = max(accept, _hopeless_pair(rivals_best, k, prior))
+                                              n_total, prior, readings.sigma_dof)
+                    stop = max(accept, _hopeless_pair(rivals_best, k, prior, n_total, readings.sigma_dof))
             fits.append(fit_effects(model, readings, chosen + [eff], starts=starts, stop_above=stop))
             known[frozenset(fits[-1].ids)] = fits[-1]
         fits.sort(key=lambda f: f.bic)
@@ -379,7 +414,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         rivals.append(_explanation(cur_fit))
     # the named causes are the cross-validated greedy choice; the verdict is the goodness of fit of that choice
     w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof,
-                       method=evidence_method)
+                       method=evidence_method, likelihood=likelihood)
     if greedy_ids and w.probability[0] < 0.01:
         # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
         lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
@@ -389,7 +424,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
         greedy_ids = tuple(e.id for e in chosen)
         w = evidence.weigh(rivals, 3 * readings.n_states, chosen=greedy_ids, sigma_dof=readings.sigma_dof,
-                       method=evidence_method)
+                       method=evidence_method, likelihood=likelihood)
     # structured lack of fit (femcheck.diagnose.lack_of_fit): a compliance-shaped residual that the overall chi^2
     # spreads over all readings. The verdict turns unexplained only when the named explanation *and* the best
     # explanation of the vocabulary (the evidence leader) both leave one: an effect below the held-out selection's
