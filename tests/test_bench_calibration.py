@@ -49,6 +49,12 @@ def test_a_set_drawn_from_the_prior_is_weighed_by_both_evidences():
     for m, expl in s.by_method.items():
         assert sum(p for _, p in expl) == pytest.approx(1.0, abs=1e-12)      # normalized posterior
         assert {ids for ids, _ in expl} == {ids for ids, _ in s.by_method["bic"]}
+    # both likelihoods weigh the same fits; without a scatter estimate of sigma (sigma_dof = 0) they agree exactly
+    assert set(s.by_likelihood) == {"gauss", "student"} and s.by_likelihood["gauss"] == s.by_method
+    for m, expl in s.by_likelihood["student"].items():
+        assert sum(p for _, p in expl) == pytest.approx(1.0, abs=1e-12)
+        if s.sigma_dof == 0:
+            assert expl == s.by_likelihood["gauss"][m]
     # the generator's truth lies within each parameter's bounds
     from femcheck.diagnose.effects import get_effect
     for eid, params in s.truth:
