@@ -66,7 +66,8 @@ EVIDENCE_METHODS = ("laplace", "bic")
 #: the default evidence approximation (the better calibrated on the calibration bench, docs/diagnose.md)
 EVIDENCE = "bic"
 LIKELIHOODS = ("gauss", "student")
-#: the default likelihood (docs/diagnose.md, "sigma's own uncertainty"): Gaussian with sigma known
+#: the default likelihood: Gaussian with sigma known. The Student-t one did not change the calibration beyond sampling
+#: noise with BIC on 80 bench sets (cause ECE 0.0252 -> 0.0243; docs/diagnose.md, "sigma's own uncertainty")
 LIKELIHOOD = "gauss"
 
 
