@@ -137,7 +137,8 @@ def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: 
     causes = {c: float(sum(p for ids, p in expl if c in ids)) for c in pool}
     return GeneratedSet(seed=seed, hidden=tuple(h[0] for h in hidden), shrink=shrink, points=points,
                         directions=directions, explanations=expl, causes=causes, seconds=seconds, by_method=by_method,
-                        sigma_dof=int(readings.sigma_dof), by_likelihood=by_likelihood, truth=tuple((h[0], tuple(sorted(h[1].items()))) for h in hidden))
+                        sigma_dof=int(readings.sigma_dof), by_likelihood=by_likelihood,
+                        truth=tuple((h[0], tuple(sorted(h[1].items()))) for h in hidden))
 
 
 def reliability(predicted, right, bins=BINS) -> dict:
@@ -180,7 +181,9 @@ def _tables(sets, key) -> dict:
 def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk",
                 max_located: int = 1, likelihood: str | None = None) -> dict:
     """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
-    tables of the default evidence (top level) and of each approximation (``by_method``), the sets and the wall time."""
+    tables of the default evidence (top level), of each approximation (``by_method``) and of each likelihood and
+    approximation (``by_likelihood``), the share of sets with sigma from the trial scatter
+    (``sigma_dof_positive_fraction``), the sets and the wall time."""
     from femcheck.diagnose import evidence
     t0 = time.perf_counter()
     args = [(s, pairs, truth, max_located, likelihood) for s in range(seed, seed + n_sets)]
