@@ -16,6 +16,7 @@ nearly collinear with another (|corr| > 0.98), or when J^T J is numerically sing
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 
@@ -55,6 +56,8 @@ class FitResult:
     #: True when the fit was stopped after its probe because even a full Gauss-Newton step could not bring it near
     #: the leading explanation (``stop_above``): its chi^2 is an upper bound and its posterior negligible
     stopped_early: bool = False
+    #: per start of a fit with ``stop_above``: what the early-stop rules saw (:class:`StopAudit`)
+    stop_audit: tuple = dataclasses.field(default=(), repr=False, compare=False)
 
     @property
     def penalty(self) -> float:
@@ -100,8 +103,48 @@ def weighted_residual(model, readings, effects, values, mask=None) -> np.ndarray
 PROBE_NFEV = 8
 #: a fit whose Gauss-Newton floor *at its start* exceeds this multiple of ``stop_above`` is stopped there, before the
 #: probe. The floor linearized at a start far from the optimum is no bound: on the bench's 9-point dataset it
-#: overestimated the converged pair chi^2 by up to 141 at chi^2 ~ 3000 (5 %); the factor leaves 10x that room
+#: overestimated the converged pair chi^2 by up to 141 at chi^2 ~ 3000 (5 %); the factor leaves 10x that room.
+#: Validated on generated variety by ``python -m femcheck.bench early_stop`` (docs/diagnose.md, "Early stops")
 START_FACTOR = 1.5
+#: the early stops of ``stop_above`` are applied (True, as shipped). False: every start is fitted to the end and the
+#: rules are only audited (``FitResult.stop_audit``); set through :func:`early_stop_rules`
+EARLY_STOP = True
+
+
+@contextlib.contextmanager
+def early_stop_rules(enabled: bool = True, start_factor: float | None = None):
+    """Within the block, fits with ``stop_above`` apply the early stops (``enabled``) or fit every start to the end
+    and only audit them; ``start_factor`` replaces :data:`START_FACTOR`. Restores both on exit (one process; the
+    bench ``early_stop`` and its test compare the diagnosis with and without the stops)."""
+    global EARLY_STOP, START_FACTOR
+    old = EARLY_STOP, START_FACTOR
+    EARLY_STOP = bool(enabled)
+    if start_factor is not None:
+        START_FACTOR = float(start_factor)
+    try:
+        yield
+    finally:
+        EARLY_STOP, START_FACTOR = old
+
+
+@dataclasses.dataclass(frozen=True)
+class StopAudit:
+    """One start of a fit with ``stop_above`` (chi^2 units, dimensionless): ``floor_start`` the Gauss-Newton floor at
+    the start, ``floor_probe`` after the :data:`PROBE_NFEV` probe (nan where the probe converged or was not run),
+    ``chi2_end`` the chi^2 this start reached (the stopping point's where it was stopped), ``rule`` the rule that
+    stops it at the :data:`START_FACTOR` in force ("start", "probe" or "" for none), ``applied`` whether it was
+    stopped; ``nfev_start`` / ``nfev_probe`` / ``nfev_end`` the residual evaluations spent up to the start judgement,
+    in the probe, and in all."""
+
+    stop_above: float
+    floor_start: float
+    floor_probe: float
+    chi2_end: float
+    rule: str
+    applied: bool
+    nfev_start: int
+    nfev_probe: int
+    nfev_end: int
 
 
 def gauss_newton_floor(residual: np.ndarray, jacobian: np.ndarray) -> float:
@@ -166,28 +209,39 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
         return weighted_residual(model, readings, effects, _split(from_x(x), effects), mask)
 
     solve = lambda x0, n: least_squares(fun, x0, bounds=(lo, hi), method="trf", x_scale=1.0, diff_step=1e-6, max_nfev=n)
-    best, nfev, stopped = None, 0, False
+    best, nfev, stopped, audit = None, 0, False, []
     for s in starts:
         x0 = np.clip(to_x(s), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         hopeless = False
         if stop_above is not None and max_nfev > PROBE_NFEV:
             r0 = fun(x0)
             J0 = _forward_jacobian(fun, x0, r0, hi)
-            nfev += 1 + len(x0)
-            if gauss_newton_floor(r0, J0) > START_FACTOR * stop_above:
+            n0 = 1 + len(x0)
+            nfev += n0
+            floor0 = gauss_newton_floor(r0, J0)
+            rule = "start" if floor0 > START_FACTOR * stop_above else ""
+            if rule and EARLY_STOP:
                 sol = OptimizeResult(x=x0, cost=0.5 * float(r0 @ r0), fun=r0, jac=J0, active_mask=np.zeros(len(x0), int),
                                      status=0, nfev=1)
+                audit.append(StopAudit(float(stop_above), floor0, float("nan"), 2.0 * sol.cost, rule, True, n0, 0, n0))
                 if best is None or sol.cost < best.cost:
                     best, stopped = sol, True
                 continue
             sol = solve(x0, PROBE_NFEV)
             nfev += sol.nfev
+            n_probe, n_more, floor_p = sol.nfev, 0, float("nan")
             if sol.status == 0:     # not converged within the probe
-                hopeless = gauss_newton_floor(sol.fun, sol.jac) > stop_above
+                floor_p = gauss_newton_floor(sol.fun, sol.jac)
+                hopeless = floor_p > stop_above
+                rule = rule or ("probe" if hopeless else "")
+                hopeless = hopeless and EARLY_STOP
                 if not hopeless:
                     more = solve(np.clip(sol.x, lo, hi), max_nfev - sol.nfev)
                     nfev += more.nfev
+                    n_more = more.nfev
                     sol = more if more.cost <= sol.cost else sol
+            audit.append(StopAudit(float(stop_above), floor0, floor_p, 2.0 * float(sol.cost), rule,
+                                   bool(rule) and EARLY_STOP, n0, n_probe, n0 + n_probe + n_more))
         else:
             sol = solve(x0, max_nfev)
             nfev += sol.nfev
@@ -248,4 +302,5 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
         occam = laplace_score(chi2, np.asarray(J), x, pr.mu, pr.sd, pr.mass, ~free) - chi2
     return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
                      chi2, n_data, k, tuple(warnings), pred, nfev, on_bound,
-                     jacobian=np.asarray(J)[:, free] if mask.all() else None, occam=occam, stopped_early=stopped)
+                     jacobian=np.asarray(J)[:, free] if mask.all() else None, occam=occam, stopped_early=stopped,
+                     stop_audit=tuple(audit))
