@@ -40,6 +40,7 @@ import numpy as np
 AREA = "early_stop"
 SETS = 24
 FACTORS = (1.0, 1.25, 1.5, 2.0, 3.0)
+RHO_TOLS = (0.1, 0.25, 0.5, 1.0)
 CASE_PATH = "cases/haptic_6psu.toml"
 AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
 FULL_DIRS = ("+x", "+y", "+z")
@@ -137,57 +138,73 @@ def compare(seed: int, *, sparse_only: bool = False, candidates=None) -> SetComp
                          causes(on) == causes(off), t_on, t_off)
 
 
-def violations(audits, factor: float) -> list:
-    """The audited starts (fitted to the end) that the rules at START_FACTOR ``factor`` stop although their end-to-end
-    chi^2 is within the threshold."""
-    stops = lambda a: (a.floor_start > factor * a.stop_above
-                       or (np.isfinite(a.floor_probe) and a.floor_probe > a.stop_above))
-    return [a for a in audits if stops(a) and a.chi2_end <= a.stop_above]
+def _stops(a, factor: float, rho_tol: float | None) -> str:
+    """The rule ("start", "probe" or "") that stops audited start ``a`` at START_FACTOR ``factor`` with the gain-ratio
+    check ``rho_tol`` (None: no check, the rule before it)."""
+    trusted = lambda rho: rho_tol is None or abs(rho - 1.0) <= rho_tol
+    if a.floor_start > factor * a.stop_above and trusted(a.rho_start):
+        return "start"
+    if np.isfinite(a.floor_probe) and a.floor_probe > a.stop_above and trusted(a.rho_probe):
+        return "probe"
+    return ""
 
 
-def evals_with_stops(audits, factor: float) -> int:
-    """Residual evaluations the audited starts would cost with the rules at START_FACTOR ``factor``."""
-    n = 0
-    for a in audits:
-        if a.floor_start > factor * a.stop_above:
-            n += a.nfev_start
-        elif np.isfinite(a.floor_probe) and a.floor_probe > a.stop_above:
-            n += a.nfev_start + a.nfev_probe
-        else:
-            n += a.nfev_end
-    return n
+def violations(audits, factor: float, rho_tol: float | None) -> list:
+    """The audited starts (fitted to the end) that the rules stop although their end-to-end chi^2 is within the
+    threshold."""
+    return [a for a in audits if _stops(a, factor, rho_tol) and a.chi2_end <= a.stop_above]
+
+
+def evals_with_stops(audits, factor: float, rho_tol: float | None) -> int:
+    """Residual evaluations the audited starts would cost with the rules (one start judgement costs ``nfev_start``,
+    the probe ``nfev_probe``)."""
+    cost = {"start": lambda a: a.nfev_start, "probe": lambda a: a.nfev_start + a.nfev_probe}
+    return sum(cost.get(_stops(a, factor, rho_tol), lambda a: a.nfev_end)(a) for a in audits)
 
 
 def summarize(sets) -> dict:
-    from femcheck.diagnose.fitting import START_FACTOR
+    from femcheck.diagnose.fitting import RHO_TOL, START_FACTOR
     from femcheck.experiment.foreign import FOREIGN
     on = [a for s in sets for a in s.audits_on]
     off = [a for s in sets for a in s.audits_off]
     within = [a for a in off if a.chi2_end <= a.stop_above]
-    crit = max((a.floor_start / a.stop_above for a in within), default=0.0)
-    probe_crit = max((a.floor_probe / a.stop_above for a in within if np.isfinite(a.floor_probe)), default=0.0)
+    trusted = lambda rho: abs(rho - 1.0) <= RHO_TOL
+    crit = max((a.floor_start / a.stop_above for a in within if trusted(a.rho_start)), default=0.0)
+    crit_old = max((a.floor_start / a.stop_above for a in within), default=0.0)
+    probe_crit = max((a.floor_probe / a.stop_above for a in within if np.isfinite(a.floor_probe)
+                      and trusted(a.rho_probe)), default=0.0)
     cpu_on, cpu_off = sum(s.cpu_on_s for s in sets), sum(s.cpu_off_s for s in sets)
+    n_off = max(sum(a.nfev_end for a in off), 1)
     out = {"sets": len(sets), "sets_full_protocol": sum("full" in s.label for s in sets),
            "sets_foreign": sum(any(f in s.label for f in FOREIGN) for s in sets),
-           "start_factor": START_FACTOR, "pair_starts_audited": len(off),
+           "start_factor": START_FACTOR, "rho_tol": RHO_TOL, "pair_starts_audited": len(off),
+           "pair_starts_ending_within_threshold": len(within),
            "pairs_stopped_at_start": sum(a.rule == "start" and a.applied for a in on),
            "pairs_stopped_after_probe": sum(a.rule == "probe" and a.applied for a in on),
-           "violations": len(violations(off, START_FACTOR)),
+           "violations": len(violations(off, START_FACTOR, RHO_TOL)),
+           "violations_without_rho_check": len(violations(off, START_FACTOR, None)),
            "max_abs_posterior_diff": max((s.posterior_diff for s in sets), default=0.0),
            "verdict_changes": sum(not s.verdict_same for s in sets),
            "causes_changes": sum(not s.causes_same for s in sets),
            "cpu_with_stops_s": round(cpu_on, 2), "cpu_without_stops_s": round(cpu_off, 2),
            "cpu_ratio_without_over_with": round(cpu_off / max(cpu_on, 1e-9), 3),
+           "evals_saved_frac": round(1.0 - evals_with_stops(off, START_FACTOR, RHO_TOL) / n_off, 4),
            "floor_overshoot_max": max((a.floor_start / max(a.chi2_end, 1e-300) for a in off), default=0.0),
-           "start_factor_critical": crit,
+           "floor_overshoot_max_rho_trusted": max((a.floor_start / max(a.chi2_end, 1e-300) for a in off
+                                                   if trusted(a.rho_start)), default=0.0),
+           "start_factor_critical": crit, "start_factor_critical_without_rho_check": crit_old,
            "start_factor_margin": START_FACTOR / crit if crit > 0 else float("inf"),
            "probe_floor_over_threshold_max_within": probe_crit}
-    n_off = max(sum(a.nfev_end for a in off), 1)
     for f in FACTORS:
         tag = f"f{f:g}".replace(".", "p")
-        out[f"violations_{tag}"] = len(violations(off, f))
-        out[f"stopped_at_start_{tag}"] = sum(a.floor_start > f * a.stop_above for a in off)
-        out[f"evals_saved_frac_{tag}"] = round(1.0 - evals_with_stops(off, f) / n_off, 4)
+        for rt, rtag in ((RHO_TOL, ""), (None, "_without_rho_check")):
+            out[f"violations_{tag}{rtag}"] = len(violations(off, f, rt))
+            out[f"stopped_at_start_{tag}{rtag}"] = sum(_stops(a, f, rt) == "start" for a in off)
+            out[f"evals_saved_frac_{tag}{rtag}"] = round(1.0 - evals_with_stops(off, f, rt) / n_off, 4)
+    for rt in RHO_TOLS:
+        tag = f"rho{rt:g}".replace(".", "p")
+        out[f"violations_{tag}"] = len(violations(off, START_FACTOR, rt))
+        out[f"evals_saved_frac_{tag}"] = round(1.0 - evals_with_stops(off, START_FACTOR, rt) / n_off, 4)
     return out
 
 
@@ -213,7 +230,7 @@ def main(argv=None) -> int:
         print(f"set {s} [{c.label}]: starts {len(c.audits_off)}, stopped start/probe "
               f"{sum(x.rule == 'start' and x.applied for x in c.audits_on)}/"
               f"{sum(x.rule == 'probe' and x.applied for x in c.audits_on)}, violations "
-              f"{len(violations(c.audits_off, 1.5))}, |dp| {c.posterior_diff:.2e}, same verdict {c.verdict_same} "
+              f"{len(violations(c.audits_off, 1.5, 0.25))}, |dp| {c.posterior_diff:.2e}, same verdict {c.verdict_same} "
               f"causes {c.causes_same}, cpu {c.cpu_on_s:.1f} / {c.cpu_off_s:.1f} s", flush=True)
     if a.dump:
         import pickle

@@ -106,6 +106,10 @@ PROBE_NFEV = 8
 #: overestimated the converged pair chi^2 by up to 141 at chi^2 ~ 3000 (5 %); the factor leaves 10x that room.
 #: Validated on generated variety by ``python -m femcheck.bench early_stop`` (docs/diagnose.md, "Early stops")
 START_FACTOR = 1.5
+#: a floor is believed only where the full Gauss-Newton step's gain ratio (:func:`gain_ratio`) is within this of 1:
+#: at a start far from the optimum the floor linearized there overshot the converged chi^2 up to 1128x (generated
+#: sets of ``python -m femcheck.bench early_stop``), so no START_FACTOR alone makes the rule safe
+RHO_TOL = 0.25
 #: the early stops of ``stop_above`` are applied (True, as shipped). False: every start is fitted to the end and the
 #: rules are only audited (``FitResult.stop_audit``); set through :func:`early_stop_rules`
 EARLY_STOP = True
@@ -145,6 +149,10 @@ class StopAudit:
     nfev_start: int
     nfev_probe: int
     nfev_end: int
+    #: gain ratio of the full Gauss-Newton step at the start / after the probe (:func:`gain_ratio`; nan where not
+    #: evaluated)
+    rho_start: float = float("nan")
+    rho_probe: float = float("nan")
 
 
 def gauss_newton_floor(residual: np.ndarray, jacobian: np.ndarray) -> float:
@@ -156,6 +164,25 @@ def gauss_newton_floor(residual: np.ndarray, jacobian: np.ndarray) -> float:
     step, *_ = np.linalg.lstsq(jacobian, r, rcond=None)
     res = r - jacobian @ step
     return float(res @ res)
+
+
+def gain_ratio(fun, x: np.ndarray, residual: np.ndarray, jacobian: np.ndarray, lo: np.ndarray,
+               hi: np.ndarray) -> float:
+    """rho = (|r|^2 - |r(x1)|^2) / (|r|^2 - |r + J (x1 - x)|^2): the actual over the linearized reduction of chi^2 by
+    the full Gauss-Newton step x1 = x + d (clipped to the bounds), one evaluation of ``fun``. rho near 1 says the
+    linearized model holds over the step, so its floor (:func:`gauss_newton_floor`) is the local minimum it claims to
+    be; far from 1, the floor says nothing about the nonlinear minimum (Nocedal & Wright 2006, Alg. 4.1: the model
+    is trusted for rho > 3/4)."""
+    r = np.asarray(residual, float)
+    if jacobian.size == 0:
+        return 1.0
+    step, *_ = np.linalg.lstsq(jacobian, -r, rcond=None)
+    x1 = np.clip(x + step, lo, hi)
+    pred = r + jacobian @ (x1 - x)
+    c0, cp = float(r @ r), float(pred @ pred)
+    r1 = fun(x1)
+    c1 = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
+    return (c0 - c1) / max(c0 - cp, 1e-12 * max(c0, 1e-300))
 
 
 def _forward_jacobian(fun, x0: np.ndarray, r0: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -173,7 +200,7 @@ def _forward_jacobian(fun, x0: np.ndarray, r0: np.ndarray, hi: np.ndarray) -> np
 
 
 def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: int = 400,
-                stop_above: float | None = None) -> FitResult:
+                stop_above: float | None = None, nested_chi2: float | None = None) -> FitResult:
     """Fit the parameters of ``effects`` (sequence of Effect) to the states in ``mask`` (bool (m,); all if None).
 
     ``starts``: list of full start vectors (natural units, concatenated over effects); default: the
@@ -182,6 +209,9 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
     (:func:`gauss_newton_floor`, the chi^2 a full linearized step would reach) is still above ``stop_above`` it is not
     continued (a rival whose posterior cannot matter; the caller sets the threshold), else it runs to convergence; a
     start whose floor is above :data:`START_FACTOR` times ``stop_above`` already is not run at all.
+    ``nested_chi2``: the chi^2 of a fitted sub-model nested in this one (e.g. a pair's better single, the other effect
+    at its neutral value): this fit's optimum is at most that, so with ``nested_chi2 <= stop_above`` nothing is
+    stopped (the floors are no bounds where the problem is not linear; the nested fit is).
     """
     effects = tuple(effects)
     params = [p for e in effects for p in e.params]
@@ -209,6 +239,8 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
         return weighted_residual(model, readings, effects, _split(from_x(x), effects), mask)
 
     solve = lambda x0, n: least_squares(fun, x0, bounds=(lo, hi), method="trf", x_scale=1.0, diff_step=1e-6, max_nfev=n)
+    if stop_above is not None and nested_chi2 is not None and nested_chi2 <= stop_above:
+        stop_above = None       # the optimum is within the threshold: a stop could only be wrong
     best, nfev, stopped, audit = None, 0, False, []
     for s in starts:
         x0 = np.clip(to_x(s), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
@@ -219,20 +251,30 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
             n0 = 1 + len(x0)
             nfev += n0
             floor0 = gauss_newton_floor(r0, J0)
-            rule = "start" if floor0 > START_FACTOR * stop_above else ""
+            rho0 = float("nan")
+            if floor0 > START_FACTOR * stop_above or not EARLY_STOP:
+                rho0 = gain_ratio(fun, x0, r0, J0, lo, hi)
+                nfev += 1
+                n0 += 1
+            rule = "start" if floor0 > START_FACTOR * stop_above and abs(rho0 - 1.0) <= RHO_TOL else ""
             if rule and EARLY_STOP:
                 sol = OptimizeResult(x=x0, cost=0.5 * float(r0 @ r0), fun=r0, jac=J0, active_mask=np.zeros(len(x0), int),
                                      status=0, nfev=1)
-                audit.append(StopAudit(float(stop_above), floor0, float("nan"), 2.0 * sol.cost, rule, True, n0, 0, n0))
+                audit.append(StopAudit(float(stop_above), floor0, float("nan"), 2.0 * sol.cost, rule, True, n0, 0, n0,
+                                       rho0))
                 if best is None or sol.cost < best.cost:
                     best, stopped = sol, True
                 continue
             sol = solve(x0, PROBE_NFEV)
             nfev += sol.nfev
-            n_probe, n_more, floor_p = sol.nfev, 0, float("nan")
+            n_probe, n_more, floor_p, rho_p = sol.nfev, 0, float("nan"), float("nan")
             if sol.status == 0:     # not converged within the probe
                 floor_p = gauss_newton_floor(sol.fun, sol.jac)
-                hopeless = floor_p > stop_above
+                if floor_p > stop_above or not EARLY_STOP:
+                    rho_p = gain_ratio(fun, sol.x, sol.fun, sol.jac, lo, hi)
+                    nfev += 1
+                    n_probe += 1
+                hopeless = floor_p > stop_above and abs(rho_p - 1.0) <= RHO_TOL
                 rule = rule or ("probe" if hopeless else "")
                 hopeless = hopeless and EARLY_STOP
                 if not hopeless:
@@ -241,7 +283,7 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
                     n_more = more.nfev
                     sol = more if more.cost <= sol.cost else sol
             audit.append(StopAudit(float(stop_above), floor0, floor_p, 2.0 * float(sol.cost), rule,
-                                   bool(rule) and EARLY_STOP, n0, n_probe, n0 + n_probe + n_more))
+                                   bool(rule) and EARLY_STOP, n0, n_probe, n0 + n_probe + n_more, rho0, rho_p))
         else:
             sol = solve(x0, max_nfev)
             nfev += sol.nfev

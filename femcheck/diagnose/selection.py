@@ -285,7 +285,8 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
                     a, b = (first, second) if singles[first.id].bic <= singles[second.id].bic else (second, first)
                     start = np.concatenate([singles[a.id].values[0], singles[b.id].values[0]])
                     f = fit_effects(model, readings, [a, b], starts=[start], max_nfev=100,
-                                    stop_above=_hopeless_pair(best, len(start), prior))
+                                    stop_above=_hopeless_pair(best, len(start), prior),
+                                    nested_chi2=min(singles[a.id].chi2, singles[b.id].chi2))
                 ex = _explanation(f)
                 out.append(ex)
                 best = min(best, max(_total(ex, n_data, prior[2], m) for m in evidence.EVIDENCE_METHODS))
@@ -342,7 +343,9 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                                               + [_explanation(f) for ids, f in known.items() if len(ids) == 1],
                                               n_total, prior)
                     stop = max(accept, _hopeless_pair(rivals_best, k, prior))
-            fits.append(fit_effects(model, readings, chosen + [eff], starts=starts, stop_above=stop))
+            nested = min([cur_fit.chi2] + [f.chi2 for ids, f in known.items() if ids == frozenset([eff.id])]) \
+                if chosen else None
+            fits.append(fit_effects(model, readings, chosen + [eff], starts=starts, stop_above=stop, nested_chi2=nested))
             known[frozenset(fits[-1].ids)] = fits[-1]
         fits.sort(key=lambda f: f.bic)
         rows = [{"round": rnd + 1, "effects": list(f.ids), "chi2": f.chi2, "bic": f.bic, "delta_bic": cur_fit.bic - f.bic}
