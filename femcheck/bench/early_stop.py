@@ -3,9 +3,11 @@
 The all-pairs diagnosis stops a pair fit that cannot come within chi^2 ``HOPELESS`` (40) of the leader
 (:func:`femcheck.diagnose.selection.fit_rivals`, the greedy round's ``stop``): at its start when the Gauss-Newton floor
 linearized there exceeds ``START_FACTOR`` x the threshold ``stop_above``, else after a ``PROBE_NFEV`` probe when the
-floor there exceeds the threshold (:func:`femcheck.diagnose.fitting.fit_effects`). The floor is the exact minimum
-only of the linearized problem; this area measures, on generated variety, whether a stopped start's end-to-end fit
-(continued to convergence) is indeed beyond the threshold.
+floor there exceeds the threshold (:func:`femcheck.diagnose.fitting.fit_effects`); a floor is believed only where the
+full Gauss-Newton step's gain ratio is within ``RHO_TOL`` of 1, and a pair whose nested single is already within the
+threshold is never stopped (``nested_chi2``). The floor is the exact minimum only of the linearized problem; this area
+measures, on generated variety, whether a stopped start's end-to-end fit (continued to convergence) is indeed beyond
+the threshold.
 
 Sets (seed s, generator :func:`generated_set`): the hidden explanation drawn from the diagnosis's own prior (none, a
 single or a pair with 1/3 each, located effects with their legs; :func:`femcheck.diagnose.prior.draw_truth`), one set
@@ -21,9 +23,12 @@ shipped runs); ``violations`` (audited starts the rules stop whose end-to-end ch
 ``causes_changes``; ``cpu_with_stops_s``, ``cpu_without_stops_s`` and their ratio; ``floor_overshoot_max`` the
 largest floor at start / end-to-end chi^2 over all audited starts (the nonlinearity the factor must cover);
 ``start_factor_critical``: the smallest START_FACTOR with no start-rule violation on these sets (the largest floor at
-start / threshold among starts that end within it) and ``start_factor_margin`` = START_FACTOR / it; and per factor f of
-``FACTORS`` (key suffix ``_f1p5`` for 1.5) the violations and the share of pair-fit residual evaluations saved
-(``evals_saved_frac``; evaluations, not seconds: a pair's cost is its evaluations).
+start / threshold among starts that end within it and pass the gain-ratio check) and ``start_factor_margin`` =
+START_FACTOR / it; per factor f of ``FACTORS`` (key suffix ``_f1p5`` for 1.5) and per gain-ratio tolerance of ``RHO_TOLS``
+(``_rho0p25``) the violations and the share of pair-fit residual evaluations saved (``evals_saved_frac``; evaluations,
+not seconds: a pair's cost is its evaluations), ``_without_rho_check`` the same without the gain-ratio check. The
+audited starts are those of fits the nested bound leaves open to a stop (the exempt ones are fitted as without a
+threshold in both runs).
 
 ``python -m femcheck.bench early_stop`` (``SETS`` sets) or ``python -m femcheck.bench.early_stop --sets N [--seed S]``
 (writes reports/bench/early_stop.json).

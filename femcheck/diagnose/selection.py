@@ -265,7 +265,10 @@ def fit_rivals(model, readings, pool, base: FitResult, *, pairs: bool = True, kn
     A pair fit is stopped after a short probe (``fit_effects(stop_above=...)``) when even a full Gauss-Newton step
     could not bring its chi^2 within :data:`HOPELESS` of the best -2 ln (prior x evidence) found so far, under either
     evidence approximation (the Occam term of a pair is >= -2 k ln 2 under both): its posterior is then below
-    2e-9 of the leader's whatever its exact optimum, and its chi^2 is reported as reached."""
+    2e-9 of the leader's whatever its exact optimum, and its chi^2 is reported as reached. The floor is a bound only
+    of the linearized problem, so a pair whose better single is already within the threshold (``nested_chi2``: the
+    pair nests it, its optimum is at most that chi^2) is never stopped: on generated sets those were the pairs the
+    floor wrongly stopped (``python -m femcheck.bench early_stop``, docs/diagnose.md "Early stops")."""
     known = known or {}
     n_data = 3 * readings.n_states
     out = [evidence.Explanation((), base.chi2, 0, base)]
