@@ -116,19 +116,21 @@ EARLY_STOP = True
 
 
 @contextlib.contextmanager
-def early_stop_rules(enabled: bool = True, start_factor: float | None = None):
+def early_stop_rules(enabled: bool = True, start_factor: float | None = None, rho_tol: float | None = None):
     """Within the block, fits with ``stop_above`` apply the early stops (``enabled``) or fit every start to the end
-    and only audit them; ``start_factor`` replaces :data:`START_FACTOR`. Restores both on exit (one process; the
-    bench ``early_stop`` and its test compare the diagnosis with and without the stops)."""
-    global EARLY_STOP, START_FACTOR
-    old = EARLY_STOP, START_FACTOR
+    and only audit them; ``start_factor`` / ``rho_tol`` replace :data:`START_FACTOR` / :data:`RHO_TOL`. Restores all
+    on exit (one process; the bench ``early_stop`` and its test compare the diagnosis with and without the stops)."""
+    global EARLY_STOP, START_FACTOR, RHO_TOL
+    old = EARLY_STOP, START_FACTOR, RHO_TOL
     EARLY_STOP = bool(enabled)
     if start_factor is not None:
         START_FACTOR = float(start_factor)
+    if rho_tol is not None:
+        RHO_TOL = float(rho_tol)
     try:
         yield
     finally:
-        EARLY_STOP, START_FACTOR = old
+        EARLY_STOP, START_FACTOR, RHO_TOL = old
 
 
 @dataclasses.dataclass(frozen=True)
