@@ -3,9 +3,10 @@ threshold when fitted to the end, and the diagnosis must not change (``femcheck.
 import numpy as np
 import pytest
 
-#: sparse generated sets of ``femcheck.bench.early_stop`` with stopped pair starts: a single located truth (2: the
-#: pairs with it start far from their optimum) and a hidden pair (10: pairs that only jointly fit)
-SEEDS = (2, 10)
+#: sparse generated sets of ``femcheck.bench.early_stop`` with stopped pair starts (5 and 13 as shipped): a located truth
+#: (2) and a clearance (28) whose pairs that end within the threshold have floors at start 0.21-0.40 of it (a factor
+#: below 0.4 would stop them: START_FACTOR 0.3 fails this test)
+SEEDS = (2, 28)
 
 
 @pytest.fixture(scope="module")
