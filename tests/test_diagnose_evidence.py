@@ -188,7 +188,7 @@ def test_diagnosis_weighs_by_laplace_on_request(sparse_diagnosis):
 
 def test_gauss_newton_floor_and_a_stopped_fit(sparse_diagnosis):
     from femcheck.diagnose.effects import get_effect
-    from femcheck.diagnose.fitting import fit_effects, gauss_newton_floor
+    from femcheck.diagnose.fitting import early_stop_rules, fit_effects, gauss_newton_floor
     rng = np.random.default_rng(2)
     X, r = rng.normal(size=(40, 3)), rng.normal(size=40)
     b, *_ = np.linalg.lstsq(X, r, rcond=None)
@@ -197,7 +197,8 @@ def test_gauss_newton_floor_and_a_stopped_fit(sparse_diagnosis):
     model, readings = sparse_diagnosis
     effs = [get_effect("clearance"), get_effect("link_modulus")]
     full = fit_effects(model, readings, effs, max_nfev=100)
-    stopped = fit_effects(model, readings, effs, max_nfev=100, stop_above=-1.0)   # every probe judged hopeless
+    with early_stop_rules(rho_tol=np.inf):         # every floor believed: every probe judged hopeless
+        stopped = fit_effects(model, readings, effs, max_nfev=100, stop_above=-1.0)
     # a stopped fit reports the chi^2 it reached: never below the converged one (less than fit tolerance 1e-6)
     assert stopped.stopped_early and not full.stopped_early
     assert stopped.chi2 >= full.chi2 * (1 - 1e-6)
