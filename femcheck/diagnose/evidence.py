@@ -186,8 +186,9 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
           ambiguity_ratio: float = AMBIGUITY_RATIO, method: str | None = None) -> Weighing:
     """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals.
 
-    ``chosen``: the ids of the explanation the caller names (e.g. after a held-out check); default the
-    posterior leader. The verdict is the goodness of fit of the named explanation."""
+    ``chosen``: the explanation the caller names (e.g. after a held-out check), as its ids or as one of
+    ``explanations`` itself (needed when two rivals share their ids, e.g. two placements of one located cause);
+    default the posterior leader. The verdict is the goodness of fit of the named explanation."""
     ex = list(explanations)
     nones = [e for e in ex if not e.ids]
     if not nones:
@@ -197,9 +198,15 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     order = np.argsort(-p, kind="stable")
     ex, p = [ex[i] for i in order], p[order]
     none = nones[0]
-    best = ex[0] if chosen is None else next((e for e in ex if set(e.ids) == set(chosen)), None)
+    if chosen is None:
+        best = ex[0]
+    elif isinstance(chosen, Explanation):
+        best = next((e for e in ex if e is chosen), None)
+    else:
+        best = next((e for e in ex if set(e.ids) == set(chosen)), None)
     if best is None:
-        raise ValueError(f"the chosen explanation {'+'.join(chosen) or 'none'} is not among the rivals")
+        name = chosen.name if isinstance(chosen, Explanation) else "+".join(chosen) or "none"
+        raise ValueError(f"the chosen explanation {name} is not among the rivals")
     if best is not ex[0]:   # the named explanation goes first, the others keep their posterior order
         j = ex.index(best)
         ex = [best] + ex[:j] + ex[j + 1:]
