@@ -176,10 +176,17 @@ class Weighing:
         return self.explanations[0]
 
     def alternatives(self, top: int = 10) -> list[dict]:
-        return [{"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
-                 "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
-                 "minus2_log_evidence": e.score(self.n_data, self.method)}
-                for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
+        out = []
+        for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1]):
+            row = {"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
+                   "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
+                   "minus2_log_evidence": e.score(self.n_data, self.method)}
+            # causes with a place (e.g. two placements of one located cause share their ids): their legs
+            legs = {c.id: list(c.legs) for c in getattr(e.payload, "effects", ()) if getattr(c, "located", False)}
+            if legs:
+                row["legs"] = legs
+            out.append(row)
+        return out
 
 
 def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: float = ALPHA,

@@ -31,9 +31,16 @@ candidates:
 fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
 (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
 spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
-model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
-forward or pruning step of the refined types. The placements are chosen on the residual of the model as given (in a
-pair with another cause, the located cause keeps that placement).
+model evaluation of 35 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
+forward or pruning step of the refined types.
+
+The screen linearizes about the model as given, or about a *background* (``background=(effects, values)``): other
+causes held at their fitted values, e.g. the leading non-located single of a diagnosis. A located cause that is the
+partner of a dominant cause in a pair is then placed on what that cause leaves, not on the dominant cause's own
+residual (:func:`femcheck.diagnose.selection.located_partners`). The background is exact for the chain and every
+effect of the vocabulary (:class:`_Background` applies the leg scales at the located effect's stage), but its
+values are the background cause's fit *alone*, which the located cause has biased: an approximation, corrected by
+the joint fit of the pair that follows.
 """
 from __future__ import annotations
 
