@@ -354,9 +354,10 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
         f = fit_effects(model, readings, [p.effect])
         out.append(_explanation(f))
         for lead in leads:
-            a, b = (lead, f) if lead.bic <= f.bic else (f, lead)
-            start = np.concatenate([a.values[0], b.values[0]])
-            fp = fit_effects(model, readings, [a.effects[0], b.effects[0]], starts=[start], max_nfev=100,
+            # the lead first, as in the screen's background: a stage-1 lead that sets a whole element column (e.g.
+            # actuation_compliance) is applied before the located scales of that column, not over them
+            start = np.concatenate([lead.values[0], f.values[0]])
+            fp = fit_effects(model, readings, [lead.effects[0], p.effect], starts=[start], max_nfev=100,
                              stop_above=_hopeless_pair(best, len(start), prior))
             out.append(_explanation(fp))
     return new, out
