@@ -310,8 +310,7 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
 
     * **partners of a pair**: the placement screen (:func:`femcheck.diagnose.placement.screen_placements`) is run again
       on the residual *after* each of the ``n_leads`` best non-located singles of ``rivals`` (the model with that
-      effect at its fitted values; only singles that beat none by ``bic_margin`` and every located single already
-      weighed, i.e. that dominate the residual). When another cause dominates the
+      effect at its fitted values; only singles that beat none by ``bic_margin``). When another cause dominates the
       residual of the model as given, the screen of the model as given ranks or places the located cause on what that
       cause leaves unexplained, not on the located cause's own signature; re-screened, the located partner is placed
       on the remainder;
@@ -329,12 +328,11 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     n_data = 3 * readings.n_states
     have = {e for ex in rivals for e in ex.payload.effects}
     none = next(ex for ex in rivals if not ex.ids)
-    # a lead must dominate the residual: beat none by the BIC margin and every located single already weighed (when a
-    # located placement explains more than any other cause, the first screen already ran on its own signature)
-    floor = min([none.payload.bic - bic_margin] + [ex.payload.bic for ex in rivals
-                                                   if len(ex.ids) == 1 and ex.payload.effects[0].located])
+    # a lead must beat none by the BIC margin. Not also every located single: a located placement that explains more
+    # than any other cause alone can still be the wrong one for the pair (seed-1000 set 1038 of the calibration bench,
+    # joint contact compliance + a spherical joint in some legs: with that condition the located cause got 0.005)
     singles = sorted((ex for ex in rivals if len(ex.ids) == 1 and not ex.payload.effects[0].located
-                      and ex.payload.bic < floor), key=lambda ex: ex.payload.bic)
+                      and ex.payload.bic < none.payload.bic - bic_margin), key=lambda ex: ex.payload.bic)
     leads = [ex.payload for ex in singles[:n_leads]]
     new = []
     for p in screened:   # the refined placements of other element types (the first max_located are in the pool)
