@@ -60,3 +60,19 @@ def test_a_set_drawn_from_the_prior_is_weighed_by_both_evidences():
     for eid, params in s.truth:
         bounds = {p.name: (p.lower, p.upper) for p in get_effect(eid).params}
         assert all(bounds[n][0] <= v <= bounds[n][1] for n, v in params)
+
+
+def test_cause_error_is_split_by_sets_that_hide_a_located_effect():
+    """``located_split``: the cause table of the sets hiding an ``*_in_legs`` effect and of the others, flat keys. Two
+    fabricated sets: a located truth given 0.0 (off by 1 on one of its two causes) and a non-located truth given
+    exactly (error 0), so the split ECEs are known exactly."""
+    from femcheck.bench.calibration import GeneratedSet, located_split
+    mk = lambda seed, hidden, expl: GeneratedSet(seed=seed, hidden=hidden, shrink=float("nan"), points=(), directions=(),
+                                                 explanations=expl, causes={"guideway_in_legs": 0.0, "clearance": 0.0},
+                                                 seconds=0.0)
+    sets = [mk(0, ("guideway_in_legs",), ((("clearance",), 0.0), ((), 1.0))),   # none given 1: the located one missed
+            mk(1, ("clearance",), ((("clearance",), 1.0),))]
+    out = located_split(sets, lambda s: s.explanations)
+    assert out["n_sets_located_sets"] == 1 and out["n_sets_other_sets"] == 1
+    # located set: causes (guideway 0 -> hidden, clearance 0 -> not): |1 - 0| / 2 = 0.5; other set: exact
+    assert out["cause_ece_located_sets"] == pytest.approx(0.5) and out["cause_ece_other_sets"] == pytest.approx(0.0)

@@ -131,7 +131,11 @@ def one_set(seed: int, pairs: bool = False, truth: str = "shrunk", max_located: 
         by_likelihood[lik] = {}
         for m in evidence.EVIDENCE_METHODS:
             p = evidence.posterior(w.explanations, w.n_data, m, lik, readings.sigma_dof)
-            by_likelihood[lik][m] = tuple((tuple(sorted(e.ids)), float(q)) for e, q in zip(w.explanations, p))
+            merged = {}   # an explanation is scored by its cause ids: the placements of one located cause are summed
+            for e, q in zip(w.explanations, p):
+                key = tuple(sorted(e.ids))
+                merged[key] = merged.get(key, 0.0) + float(q)
+            by_likelihood[lik][m] = tuple(merged.items())
     by_method = by_likelihood[w.likelihood]
     expl = by_method[w.method]
     causes = {c: float(sum(p for ids, p in expl if c in ids)) for c in pool}
@@ -178,6 +182,25 @@ def _tables(sets, key) -> dict:
     return {"explanations": reliability(ep, er), "causes": reliability(cp, cr), "leader": reliability(top_p, top_r)}
 
 
+def hides_located(s: GeneratedSet) -> bool:
+    """Whether set ``s`` hides a located (``<element>_in_legs``) effect."""
+    from femcheck.diagnose.effects import get_effect
+    return any(get_effect(h).located for h in s.hidden)
+
+
+def located_split(sets, key) -> dict:
+    """Cause-level reliability on the sets that hide a located effect and on the others (flat keys)."""
+    out = {}
+    for tag, sub in (("located_sets", [s for s in sets if hides_located(s)]),
+                     ("other_sets", [s for s in sets if not hides_located(s)])):
+        r = _tables(sub, key)["causes"] if sub else reliability([], [])
+        out[f"cause_ece_{tag}"] = r["ece"]
+        out[f"cause_brier_{tag}"] = r["brier"]
+        out[f"n_sets_{tag}"] = len(sub)
+        out[f"cause_table_{tag}"] = r
+    return out
+
+
 def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = False, truth: str = "shrunk",
                 max_located: int = 1, likelihood: str | None = None) -> dict:
     """Generate and diagnose ``n_sets`` sets (seeds ``seed`` ..), return the explanation- and cause-level reliability
@@ -198,6 +221,8 @@ def calibration(n_sets: int = 60, jobs: int = 1, seed: int = 0, pairs: bool = Fa
     out["by_likelihood"] = {lik: {m: _tables(sets, lambda s, m=m, lik=lik: s.by_likelihood[lik][m])
                                   for m in evidence.EVIDENCE_METHODS} for lik in evidence.LIKELIHOODS}
     out["sigma_dof_positive_fraction"] = float(np.mean([s.sigma_dof > 0 for s in sets])) if sets else float("nan")
+    for m in evidence.EVIDENCE_METHODS:
+        out["by_method"][m].update(located_split(sets, lambda s, m=m: s.by_method[m]))
     out.update(sets=sets, n_sets=n_sets, wall_s=time.perf_counter() - t0, default_method=evidence.EVIDENCE,
                likelihood=likelihood or evidence.LIKELIHOOD,
                mean_diagnosis_s=float(np.mean([s.seconds for s in sets])) if sets else float("nan"))
@@ -213,6 +238,10 @@ def markdown(result: dict, command: str) -> str:
     for m, t in result["by_method"].items():
         out.append(f"| {m} | {t['explanations']['ece']:.4f} | {t['explanations']['brier']:.4f} | {t['causes']['ece']:.4f} | "
                    f"{t['causes']['brier']:.4f} | {t['leader']['ece']:.4f} |")
+    out += ["", "| evidence | cause ECE, sets hiding a located effect | cause ECE, the others |", "|---|---|---|"]
+    for m, t in result["by_method"].items():
+        out.append(f"| {m} | {t['cause_ece_located_sets']:.4f} ({t['n_sets_located_sets']} sets) | "
+                   f"{t['cause_ece_other_sets']:.4f} ({t['n_sets_other_sets']} sets) |")
     out.append("")
     if "by_likelihood" in result:
         out += [f"sigma from the trial scatter (sigma_dof > 0) on {result['sigma_dof_positive_fraction']:.0%} of the "
@@ -226,14 +255,18 @@ def markdown(result: dict, command: str) -> str:
         out.append("")
     for m, t in result["by_method"].items():
         out += _markdown_tables(t, f" ({m})")
+        for tag, title in (("located_sets", "sets hiding a located effect"), ("other_sets", "the other sets")):
+            out += _markdown_tables({"causes": t[f"cause_table_{tag}"]}, f" ({m}, {title})", keys=("causes",))
     return "\n".join(out + _markdown_wrong(result))
 
 
-def _markdown_tables(result: dict, tag: str) -> list:
+def _markdown_tables(result: dict, tag: str, keys=("explanations", "causes", "leader")) -> list:
     out = []
     for key, title in (("explanations", "every explanation's posterior vs being the hidden one"),
                        ("causes", "every effect's marginal probability vs being hidden"),
                        ("leader", "the leading explanation's posterior vs being the hidden one")):
+        if key not in keys:
+            continue
         r = result[key]
         out += [f"**{title}{tag}** ({r['n']} predictions; ECE {r['ece']:.3f}, Brier {r['brier']:.3f})", "",
                 "| predicted | n | mean predicted | observed right | ± se |", "|---|---|---|---|---|"]

@@ -245,10 +245,17 @@ class Weighing:
         return self.explanations[0]
 
     def alternatives(self, top: int = 10) -> list[dict]:
-        return [{"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
-                 "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
-                 "minus2_log_evidence": e.score(self.n_data, self.method, self.likelihood, self.sigma_dof)}
-                for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1])]
+        out = []
+        for e, p in zip(self.explanations[1:top + 1], self.probability[1:top + 1]):
+            row = {"ids": list(e.ids) or ["none"], "probability": p, "chi2": e.chi2, "n_params": e.n_params,
+                   "bic": bic(e.chi2, e.n_params, self.n_data) + e.penalty,
+                   "minus2_log_evidence": e.score(self.n_data, self.method, self.likelihood, self.sigma_dof)}
+            # causes with a place (e.g. two placements of one located cause share their ids): their legs
+            legs = {c.id: list(c.legs) for c in getattr(e.payload, "effects", ()) if getattr(c, "located", False)}
+            if legs:
+                row["legs"] = legs
+            out.append(row)
+        return out
 
 
 def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: float = ALPHA,
@@ -256,8 +263,9 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
           likelihood: str | None = None) -> Weighing:
     """Weigh rival ``explanations`` (must include the no-effect one, ``ids == ()``) of ``n_data`` residuals.
 
-    ``chosen``: the ids of the explanation the caller names (e.g. after a held-out check); default the
-    posterior leader. The verdict is the goodness of fit of the named explanation. ``likelihood``: "gauss" |
+    ``chosen``: the explanation the caller names (e.g. after a held-out check), as its ids or as one of
+    ``explanations`` itself (needed when two rivals share their ids, e.g. two placements of one located cause);
+    default the posterior leader. The verdict is the goodness of fit of the named explanation. ``likelihood``: "gauss" |
     "student" (default :data:`LIKELIHOOD`; "student" integrates sigma out when ``sigma_dof`` > 0)."""
     ex = list(explanations)
     nones = [e for e in ex if not e.ids]
@@ -269,9 +277,15 @@ def weigh(explanations, n_data: int, *, chosen=None, sigma_dof: int = 0, alpha: 
     order = np.argsort(-p, kind="stable")
     ex, p = [ex[i] for i in order], p[order]
     none = nones[0]
-    best = ex[0] if chosen is None else next((e for e in ex if set(e.ids) == set(chosen)), None)
+    if chosen is None:
+        best = ex[0]
+    elif isinstance(chosen, Explanation):
+        best = next((e for e in ex if e is chosen), None)
+    else:
+        best = next((e for e in ex if set(e.ids) == set(chosen)), None)
     if best is None:
-        raise ValueError(f"the chosen explanation {'+'.join(chosen) or 'none'} is not among the rivals")
+        name = chosen.name if isinstance(chosen, Explanation) else "+".join(chosen) or "none"
+        raise ValueError(f"the chosen explanation {name} is not among the rivals")
     if best is not ex[0]:   # the named explanation goes first, the others keep their posterior order
         j = ex.index(best)
         ex = [best] + ex[:j] + ex[j + 1:]

@@ -31,9 +31,16 @@ candidates:
 fitted with the full nonlinear model alone and in every pair, and weighed with their extended BIC
 (:attr:`ElementInLegs.penalty`). When two element types of the same legs are alike at the measured points (a
 spherical and a universal joint sit next to each other), both enter and the evidence splits between them. Cost: one
-model evaluation of 30 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
-forward or pruning step of the refined types. The placements are chosen on the residual of the model as given (in a
-pair with another cause, the located cause keeps that placement).
+model evaluation of 35 x the readings, 5 x 6 small least-squares problems, and 3 evaluations of 7 x the readings per
+forward or pruning step of the refined types.
+
+The screen linearizes about the model as given, or about a *background* (``background=(effects, values)``): other
+causes held at their fitted values, e.g. the leading non-located single of a diagnosis. A located cause that is the
+partner of a dominant cause in a pair is then placed on what that cause leaves, not on the dominant cause's own
+residual (:func:`femcheck.diagnose.selection.located_partners`). The background is exact for the chain and every
+effect of the vocabulary (:class:`_Background` applies the leg scales at the located effect's stage), but its
+values are the background cause's fit *alone*, which the located cause has biased: an approximation, corrected by
+the joint fit of the pair that follows.
 """
 from __future__ import annotations
 
@@ -58,21 +65,70 @@ class Placement:
     t: tuple[float, ...]
 
 
-def leg_jacobians(model, readings, located) -> np.ndarray:
+class _Background:
+    """Predicted readings with the element scales of one element column set per leg, on top of ``effects`` (other,
+    non-located causes) at their fitted ``values``: the model the screening linearizes. Without effects this is the
+    model as given (one batched chain evaluation per call).
+
+    The located effect *replaces* its column in the legs it holds (``ElementInLegs.apply``, stage 1), so the leg
+    scales are applied where a fit of the pair would apply them: after the background effects of stage <= 1 (their
+    column value is the leg's :meth:`neutral`, e.g. ``actuation_compliance``'s scale) and before those of later
+    stages (``leg_softening`` multiplies, ``hertz_stiffening`` adds, the reading effects act on the result).
+    Effects that change the force, the rotation compliance, the added displacement or the sensor do not depend on the
+    leg scales, so a batch of n scale vectors is one chain evaluation of n x m states."""
+
+    def __init__(self, model, readings, effects=(), values=(), stage: int = 1):
+        from femcheck.diagnose.model import WorkingState
+        self.model, self.readings = model, readings
+        m = len(readings.phase)
+        order = sorted(zip(effects, values), key=lambda ev: ev[0].stage)
+        st = WorkingState(force=np.array(readings.force, float),
+                          scale=np.array(np.broadcast_to(model.base_scale, (m, 6, 5))), c_rot=0.0,
+                          extra=np.zeros((m, 3)), sensor=np.eye(3))
+        for eff, v in order:
+            if eff.stage <= stage:
+                eff.apply(model, readings, np.asarray(v, float), st)
+        self._early = st
+        self._late = [(eff, np.asarray(v, float)) for eff, v in order if eff.stage > stage]
+
+    def neutral(self, column: int) -> np.ndarray:
+        """(6,) leg scales of ``column`` that leave the background unchanged (the model's, or a stage-1 cause's)."""
+        return np.array(self._early.scale[0, :, column], float)
+
+    def __call__(self, column: int, X) -> np.ndarray:
+        """(n, m, 3) predicted readings for leg scales ``X`` (n, 6) of element ``column``."""
+        from femcheck.diagnose.model import WorkingState
+        X = np.atleast_2d(np.asarray(X, float))
+        n, m = len(X), len(self.readings.phase)
+        scale = np.broadcast_to(self._early.scale, (n, m, 6, 5)).copy()
+        scale[:, :, :, column] = X[:, None, :]
+        extra, sensor, c_rot, force = self._early.extra, self._early.sensor, self._early.c_rot, self._early.force
+        if self._late:
+            outs = []
+            for j in range(n):   # cheap array updates; the chain evaluation below stays one batched call
+                st = WorkingState(force=force.copy(), scale=scale[j], c_rot=c_rot, extra=extra.copy(), sensor=sensor.copy())
+                for eff, v in self._late:
+                    eff.apply(self.model, self.readings, v, st)
+                outs.append(st)
+            force, c_rot, extra, sensor = outs[0].force, outs[0].c_rot, outs[0].extra, outs[0].sensor
+            scale = np.stack([st.scale for st in outs])
+        d = self.model.tcp_displacement(np.tile(self.readings.pose, (n, 1)), np.tile(force, (n, 1)),
+                                        scale.reshape(n * m, 6, 5), c_rot)
+        return (d.reshape(n, m, 3) + extra[None]) @ sensor.T
+
+
+def leg_jacobians(model, readings, located, background: _Background | None = None) -> np.ndarray:
     """(n_effects, N, 6) weighted Jacobian of every reading (N = 3 m, axes fastest) in the six per-leg scales of
-    each effect of ``located``, at the model as given (one batched evaluation of len(located) x 6 x m states)."""
-    m = len(readings.phase)
-    base = np.array(np.broadcast_to(model.base_scale, (m, 6, 5)), float)
-    d0 = model.tcp_displacement(readings.pose, readings.force, base)
-    n = len(located)
-    scale = np.broadcast_to(base, (n, 6, m, 6, 5)).copy()
-    for a, eff in enumerate(located):
-        for i in range(6):
-            scale[a, i, :, i, eff.column] += _STEP
-    d = model.tcp_displacement(np.tile(readings.pose, (n * 6, 1)), np.tile(readings.force, (n * 6, 1)),
-                               scale.reshape(n * 6 * m, 6, 5))
-    J = (d.reshape(n, 6, m, 3) - d0[None, None]) / _STEP / readings.sigma[None, None]
-    return J.reshape(n, 6, 3 * m).transpose(0, 2, 1)
+    each effect of ``located``, at the model as given or at ``background`` (one batched evaluation of
+    len(located) x 6 x m states per element column)."""
+    bg = background or _Background(model, readings)
+    out = []
+    for eff in located:
+        x0 = bg.neutral(eff.column)
+        X = np.vstack([x0, x0 + _STEP * np.eye(6)])
+        d = bg(eff.column, X)
+        out.append(((d[1:] - d[0][None]) / _STEP / readings.sigma[None]).reshape(6, -1).T)
+    return np.array(out)
 
 
 def _lstsq(G, r):
@@ -85,25 +141,21 @@ def _lstsq(G, r):
     return b, chi2, se
 
 
-def _state(model, readings, eff, x):
-    """Weighted residual r (N,) at leg scales ``x`` (6,) of ``eff`` and its Jacobian G (N, 6) in the six scales (one
-    batched evaluation of 7 x m states, forward differences)."""
-    m = len(readings.phase)
-    sc = np.array(np.broadcast_to(model.base_scale, (7, m, 6, 5)), float)
-    sc[:, :, :, eff.column] = x[None, None, :]
-    for i in range(6):
-        sc[i + 1, :, i, eff.column] += _STEP
-    d = model.tcp_displacement(np.tile(readings.pose, (7, 1)), np.tile(readings.force, (7, 1)),
-                               sc.reshape(7 * m, 6, 5)).reshape(7, m, 3)
+def _state(bg: _Background, eff, x):
+    """Weighted residual r (N,) at leg scales ``x`` (6,) of ``eff`` over the background ``bg`` and its Jacobian
+    G (N, 6) in the six scales (one batched evaluation of 7 x m states, forward differences)."""
+    d = bg(eff.column, np.vstack([x, x + _STEP * np.eye(6)]))
+    readings = bg.readings
     r = ((readings.disp - d[0]) / readings.sigma).ravel()
     G = ((d[1:] - d[0][None]) / _STEP / readings.sigma[None]).reshape(6, -1).T
     return r, G
 
 
-def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
+def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
     """Forward selection of legs with relinearization (see module doc, step 5): (score, legs) of the best subset."""
-    x = np.array(model.base_scale)[:, eff.column].astype(float)
-    r, G = _state(model, readings, eff, x)
+    x0 = bg.neutral(eff.column)
+    x = x0.copy()
+    r, G = _state(bg, eff, x)
     active, best, worse, best_x = [], (score_none, ()), 0, x.copy()
     while len(active) < 5 and worse < 3:
         trial = []
@@ -115,7 +167,7 @@ def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
         for _ in range(iters):   # Gauss-Newton on the active legs, the others at the model's value
             b, _, _ = _lstsq(G[:, active], r)
             x[active] = np.clip(x[active] + b, 0.0, None)
-            r, G = _state(model, readings, eff, x)
+            r, G = _state(bg, eff, x)
         score = ebic(float(r @ r), len(active))
         worse = worse + 1 if score >= best[0] else 0
         if score < best[0]:
@@ -125,12 +177,12 @@ def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
         for leg in best[1]:
             keep = [i for i in best[1] if i != leg]
             x = best_x.copy()
-            x[leg] = model.base_scale[leg, eff.column]
+            x[leg] = x0[leg]
             for _ in range(iters):
-                r, G = _state(model, readings, eff, x)
+                r, G = _state(bg, eff, x)
                 b, _, _ = _lstsq(G[:, keep], r)
                 x[keep] = np.clip(x[keep] + b, 0.0, None)
-            r, _ = _state(model, readings, eff, x)
+            r, _ = _state(bg, eff, x)
             trials.append((ebic(float(r @ r), len(keep)), tuple(keep), x))
         score, legs, x = min(trials, key=lambda t: t[0])
         if score >= best[0]:
@@ -139,18 +191,22 @@ def _forward(model, readings, eff, score_none, ebic, iters: int = 3):
     return best
 
 
-def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0) -> list[Placement]:
+def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0,
+                      background=None) -> list[Placement]:
     """The best placement of each effect of ``located`` (see module doc), best first: those within ``margin`` of the
-    best score (at most ``keep``), only those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`."""
+    best score (at most ``keep``), only those that beat no change. ``readings``: :class:`~femcheck.measured.Readings`.
+
+    ``background``: (effects, values) of other causes held at their fitted values (e.g. the leading non-located
+    single of a diagnosis): the placement is then chosen on what that cause leaves, the partner of a pair, instead of
+    on the residual of the model as given (``score_none`` is then the chi^2 of the background alone)."""
     if not located:
         return []
-    m = len(readings.phase)
-    base = np.array(np.broadcast_to(model.base_scale, (m, 6, 5)), float)
-    r0 = ((readings.disp - model.tcp_displacement(readings.pose, readings.force, base)) / readings.sigma).ravel()
+    bg = _Background(model, readings, *(background or ((), ())))
+    r0 = ((readings.disp - bg(located[0].column, bg.neutral(located[0].column))[0]) / readings.sigma).ravel()
     N = r0.size
     chi2_0 = float(r0 @ r0)
     ebic = lambda chi2, k: chi2 + k * math.log(N) + (2.0 * math.log(math.comb(6, k)) if k < 6 else 0.0)
-    J = leg_jacobians(model, readings, located)
+    J = leg_jacobians(model, readings, located, bg)
     linear = []
     for eff, G in zip(located, J):   # 1.-4. linearized backward elimination: ranks the element types
         legs = list(range(6))
@@ -172,7 +228,7 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
         # a linear minimum at all six legs is not an all-legs change: a leg scale far from 1 (a near-rigid element,
         # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward
         # selection decides, capped at five legs (six is the element's all-legs cause, weighed as its own effect)
-        score, legs = _forward(model, readings, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        score, legs = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
         if legs:
             out.append(Placement(eff.restricted(legs), score, chi2_0, t_full))
     out.sort(key=lambda p: p.score)
