@@ -43,3 +43,24 @@ def assert_same_tables(t1, t2):
     assert a.keys() == b.keys()
     for c in a:
         np.testing.assert_array_equal(a[c], b[c], err_msg=c)
+
+
+def sparse_actuation_readings():
+    """(model, readings): the detailed rigid model and a sparse generated set (actuation compliance x 1.5, points P0 and
+    P6, +z and +x, 3 trials, no sweep): sigma comes from the trial scatter (sigma_dof > 0) and the rivals' posterior is
+    not all 0 or 1. Shared by the evidence tests that weigh one diagnosis several ways."""
+    import dataclasses as dc
+
+    import numpy as np
+
+    import femcheck
+    from femcheck.diagnose import AnalyticalChainModel
+    from femcheck.experiment.simulate import simulate
+    from femcheck.measured import process
+    case = femcheck.load_case(REFERENCE_CASE)
+    model = AnalyticalChainModel(case, "detailed", "rigid")
+    data = simulate(case, [("actuation_compliance", {"scale": 1.5})], seed=4, directions=("+z", "+x"), sweep=False).data
+    keep = np.isin(data.point, ["P0", "P6"])
+    data = dc.replace(data, **{f: getattr(data, f)[keep] for f in
+                               ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
+    return model, process(data, case)

@@ -153,18 +153,8 @@ def test_truncated_prior_mass_and_draws():
 
 @pytest.fixture(scope="module")
 def sparse_diagnosis():
-    import dataclasses as dc
-    import femcheck
-    from femcheck.diagnose import AnalyticalChainModel
-    from femcheck.experiment.simulate import simulate
-    from femcheck.measured import process
-    case = femcheck.load_case("cases/haptic_6psu.toml")
-    model = AnalyticalChainModel(case, "detailed", "rigid")
-    data = simulate(case, [("actuation_compliance", {"scale": 1.5})], seed=4, directions=("+z", "+x"), sweep=False).data
-    keep = np.isin(data.point, ["P0", "P6"])
-    data = dc.replace(data, **{f: getattr(data, f)[keep] for f in
-                               ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
-    return model, process(data, case)
+    from tests.conftest import sparse_actuation_readings
+    return sparse_actuation_readings()
 
 
 def test_diagnosis_weighs_by_laplace_on_request(sparse_diagnosis):

@@ -127,18 +127,9 @@ def test_diagnosis_weighs_by_student_on_request():
     """End to end on a sparse generated set (3 trials: sigma from the scatter, sigma_dof > 0): the weighing is the
     Student-t Laplace posterior of the same fits, every fitted rival carries its Student-t Occam term, the truth is
     named either way, and the JSON states the likelihood."""
-    import dataclasses as dc
-    import femcheck
-    from femcheck.diagnose import AnalyticalChainModel, diagnose
-    from femcheck.experiment.simulate import simulate
-    from femcheck.measured import process
-    case = femcheck.load_case("cases/haptic_6psu.toml")
-    model = AnalyticalChainModel(case, "detailed", "rigid")
-    data = simulate(case, [("actuation_compliance", {"scale": 1.5})], seed=4, directions=("+z", "+x"), sweep=False).data
-    keep = np.isin(data.point, ["P0", "P6"])
-    data = dc.replace(data, **{f: getattr(data, f)[keep] for f in
-                               ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
-    readings = process(data, case)
+    from femcheck.diagnose import diagnose
+    from tests.conftest import sparse_actuation_readings
+    model, readings = sparse_actuation_readings()
     assert readings.sigma_dof > 0
     pool = ["actuation_compliance", "joint_contact_compliance", "link_modulus"]
     d = diagnose(model, readings, candidates=pool, with_baseline=False, evidence_method="laplace", likelihood="student")
