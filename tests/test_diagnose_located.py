@@ -246,3 +246,22 @@ def test_located_probability_is_shared_between_placements_the_data_cannot_separa
         # three points by a Delta BIC below 2 ln 1000 ~ 14 (the two draws: 0.67 / 0.29, 0.993 / 0.0075); which one
         # leads is up to the noise. Together they hold >= 85 % (the rest: pairs that add a cause within noise)
         assert uj > 1e-3 and sp > 1e-3 and sp + uj > 0.85, (leg, f, marg)
+
+
+def test_located_siblings_weigh_every_element_type_of_the_placed_legs(case, model):
+    """Opt-in ``located_siblings``: the legs a screen keeps are weighed with every other element type too (a drive, a
+    guideway and the two joints of a leg act in series). Without the option the guideway of the placed leg is not
+    weighed on this set; with it, all five element types of that leg are."""
+    leg = 2
+    ve = simulate(case, [("actuation_in_legs", {f"leg{leg}": 2.5})], seed=91, directions=FAST_DIRECTIONS, sweep=False)
+    readings = process(_sparse(ve.data, ("P0", "P3", "P5")), case)
+    types = set(LOCATED)
+    weighed = {}
+    for opt in (False, True):
+        d = diagnose(model, readings, with_baseline=False, located_siblings=opt)
+        weighed[opt] = {q.effect.id for q in d.placements + d.partner_placements if q.effect.legs == (leg,)}
+    placed = next(q.effect.legs for q in d.placements)
+    assert placed == (leg,), placed
+    # the option adds the types: every element type of the placed leg is weighed with it, fewer without it
+    assert types <= weighed[True], weighed
+    assert weighed[False] < weighed[True], weighed
