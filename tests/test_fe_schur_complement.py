@@ -24,9 +24,13 @@ def _two_floating_bodies(m=12):
     return K, r
 
 
-@pytest.mark.parametrize("method", ["blockwise", pytest.param("pardiso", marks=pytest.mark.skipif(
-    not pardiso_available(), reason="pypardiso/MKL not installed")), pytest.param("cholmod", marks=pytest.mark.skipif(
-    not cvxopt_available(), reason="cvxopt (CHOLMOD) not installed"))])
+#: every Schur-complement path, each skipped where its solver is not installed
+METHODS = ["blockwise",
+           pytest.param("pardiso", marks=pytest.mark.skipif(not pardiso_available(), reason="pypardiso/MKL not installed")),
+           pytest.param("cholmod", marks=pytest.mark.skipif(not cvxopt_available(), reason="cvxopt (CHOLMOD) not installed"))]
+
+
+@pytest.mark.parametrize("method", METHODS)
 def test_schur_complement_matches_the_dense_formula(method):
     K, r = _two_floating_bodies()
     i = np.setdiff1d(np.arange(K.shape[0]), r)
@@ -39,9 +43,7 @@ def test_schur_complement_matches_the_dense_formula(method):
     assert np.abs(S[:, : r.size // 2].sum(axis=1)).max() <= 1e-10 * np.abs(S_ref).max()
 
 
-@pytest.mark.parametrize("method", ["blockwise", pytest.param("pardiso", marks=pytest.mark.skipif(
-    not pardiso_available(), reason="pypardiso/MKL not installed")), pytest.param("cholmod", marks=pytest.mark.skipif(
-    not cvxopt_available(), reason="cvxopt (CHOLMOD) not installed"))])
+@pytest.mark.parametrize("method", METHODS)
 def test_condensation_extends_the_retained_displacement_from_the_same_factorization(method):
     from femcheck.fe.schur_complement import condense
 
