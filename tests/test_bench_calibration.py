@@ -76,3 +76,27 @@ def test_cause_error_is_split_by_sets_that_hide_a_located_effect():
     assert out["n_sets_located_sets"] == 1 and out["n_sets_other_sets"] == 1
     # located set: causes (guideway 0 -> hidden, clearance 0 -> not): |1 - 0| / 2 = 0.5; other set: exact
     assert out["cause_ece_located_sets"] == pytest.approx(0.5) and out["cause_ece_other_sets"] == pytest.approx(0.0)
+
+
+def test_cause_error_is_split_by_the_kind_of_cause_with_a_calibrated_null():
+    """``located_split`` by cause kind over all sets, and the ECE a calibrated predictor would show
+    (:func:`ece_null`). Fabricated sets with known answers: a located cause given 0.0 that was hidden (error 1) and a
+    non-located one given exactly; then predictions drawn calibrated by construction (outcomes Bernoulli(p)) must not
+    be flagged, and the same predictions with their outcomes flipped must be."""
+    from femcheck.bench.calibration import GeneratedSet, ece_null, located_split, reliability
+    mk = lambda seed, hidden, expl, causes: GeneratedSet(seed=seed, hidden=hidden, shrink=float("nan"), points=(),
+                                                         directions=(), explanations=expl, causes=causes, seconds=0.0)
+    sets = [mk(0, ("guideway_in_legs",), ((("clearance",), 0.0), ((), 1.0)),
+               {"guideway_in_legs": 0.0, "clearance": 0.0}),
+            mk(1, ("clearance",), ((("clearance",), 1.0),), {"guideway_in_legs": 0.0, "clearance": 0.0})]
+    out = located_split(sets, lambda s: s.explanations)
+    # located causes: guideway 0 (hidden) and guideway 0 (not): |0.5 - 0| = 0.5; other causes: 0 and 1, both right
+    assert out["cause_ece_located_causes"] == pytest.approx(0.5) and out["cause_ece_other_causes"] == pytest.approx(0.0)
+    rng = np.random.default_rng(5)
+    p = rng.beta(0.3, 0.9, size=400)
+    y = rng.uniform(size=p.size) < p
+    null = ece_null(p, n_draws=400, seed=1)
+    # calibrated by construction: its ECE lies inside the null (a 1-in-200 miss allowed: 0.995 quantile)
+    assert reliability(p, y)["ece"] <= np.quantile(null, 0.995)
+    # the outcomes of 1 - p: grossly miscalibrated, far beyond the null's range
+    assert reliability(p, ~y)["ece"] > np.quantile(null, 0.999)

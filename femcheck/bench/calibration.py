@@ -188,9 +188,38 @@ def hides_located(s: GeneratedSet) -> bool:
     return any(get_effect(h).located for h in s.hidden)
 
 
+def ece_null(predicted, n_draws: int = 1000, seed: int = 0) -> np.ndarray:
+    """(n_draws,) ECE of ``predicted`` probabilities (n,) against outcomes drawn as Bernoulli(predicted): the
+    sampling distribution of the ECE of a *perfectly calibrated* predictor with the same predictions (consistency
+    resampling, Broecker & Smith, Weather Forecast. 22 (2007) 651). A few hundred predictions in a handful of bins
+    give a calibrated predictor an ECE well above 0; an observed ECE is a finding only beyond this distribution."""
+    p = np.asarray(predicted, float)
+    rng = np.random.default_rng(seed)
+    return np.array([reliability(p, rng.uniform(size=p.size) < p)["ece"] for _ in range(n_draws)])
+
+
 def located_split(sets, key) -> dict:
-    """Cause-level reliability on the sets that hide a located effect and on the others (flat keys)."""
-    out = {}
+    """Cause-level reliability on the sets that hide a located effect and on the others, and over all sets for the
+    located causes (``<element>_in_legs``) and for the others, each with the 95 % quantile of the ECE a perfectly
+    calibrated predictor would show on the same predictions (:func:`ece_null`) and the p-value of the observed ECE
+    (flat keys).
+
+    The split by *set* conditions on the hidden truth: on sets that hide a located effect, located causes are right
+    more often than on average by construction, so even exact posteriors look under-confident there and
+    over-confident on the other sets. The split by *cause* conditions on the prediction only, which calibration
+    allows; it is the one to read."""
+    from femcheck.diagnose.effects import get_effect
+    out, rows = {}, [(min(1.0, float(sum(p for ids, p in key(s) if c in ids))), c in s.hidden,
+                      bool(get_effect(c).located)) for s in sets for c in s.causes]
+    p = np.array([r[0] for r in rows], float)
+    y, k = (np.array([r[i] for r in rows], bool) for i in (1, 2))
+    for tag, m in (("all_causes", np.ones(p.size, bool)), ("located_causes", k), ("other_causes", ~k)):
+        r = reliability(p[m], y[m])
+        null = ece_null(p[m]) if m.any() else np.array([np.nan])
+        out[f"cause_ece_{tag}"] = r["ece"]
+        out[f"cause_ece_null95_{tag}"] = float(np.quantile(null, 0.95))
+        out[f"cause_ece_p_value_{tag}"] = float(np.mean(null >= r["ece"]))
+        out[f"cause_table_{tag}"] = r
     for tag, sub in (("located_sets", [s for s in sets if hides_located(s)]),
                      ("other_sets", [s for s in sets if not hides_located(s)])):
         r = _tables(sub, key)["causes"] if sub else reliability([], [])
@@ -242,6 +271,11 @@ def markdown(result: dict, command: str) -> str:
     for m, t in result["by_method"].items():
         out.append(f"| {m} | {t['cause_ece_located_sets']:.4f} ({t['n_sets_located_sets']} sets) | "
                    f"{t['cause_ece_other_sets']:.4f} ({t['n_sets_other_sets']} sets) |")
+    out += ["", "| evidence | causes | cause ECE | ECE of a calibrated predictor, 95 % | p-value |", "|---|---|---|---|---|"]
+    for m, t in result["by_method"].items():
+        for tag, title in (("all_causes", "all"), ("located_causes", "located"), ("other_causes", "the others")):
+            out.append(f"| {m} | {title} ({t[f'cause_table_{tag}']['n']} predictions) | {t[f'cause_ece_{tag}']:.4f} | "
+                       f"{t[f'cause_ece_null95_{tag}']:.4f} | {t[f'cause_ece_p_value_{tag}']:.2f} |")
     out.append("")
     if "by_likelihood" in result:
         out += [f"sigma from the trial scatter (sigma_dof > 0) on {result['sigma_dof_positive_fraction']:.0%} of the "
@@ -255,7 +289,8 @@ def markdown(result: dict, command: str) -> str:
         out.append("")
     for m, t in result["by_method"].items():
         out += _markdown_tables(t, f" ({m})")
-        for tag, title in (("located_sets", "sets hiding a located effect"), ("other_sets", "the other sets")):
+        for tag, title in (("located_causes", "located causes"), ("other_causes", "the other causes"),
+                           ("located_sets", "sets hiding a located effect"), ("other_sets", "the other sets")):
             out += _markdown_tables({"causes": t[f"cause_table_{tag}"]}, f" ({m}, {title})", keys=("causes",))
     return "\n".join(out + _markdown_wrong(result))
 

@@ -125,6 +125,10 @@ class Explanation:
     #: Laplace Occam term of the Student-t likelihood, -2 ln Z - :func:`student_term` (:func:`laplace_score` with
     #: ``curvature`` = :func:`student_curvature` for the readings' sigma_dof); None: use ``occam``
     occam_student: float | None = None
+    #: -2 ln Z already summed over a family of models, by ("bic" | "laplace", "gauss" | "student"); ``score``
+    #: returns it as is (e.g. the linearized sum over the leg sets of a located cause that no fit weighed,
+    #: :func:`femcheck.diagnose.placement.unweighed_placements`); None for a fitted explanation
+    fixed_scores: dict | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def score(self, n_data: int, method: str | None = None, likelihood: str | None = None,
               sigma_dof: int = 0) -> float:
@@ -135,6 +139,8 @@ class Explanation:
         if method not in EVIDENCE_METHODS:
             raise ValueError(f"evidence method {method!r}; expected one of {', '.join(EVIDENCE_METHODS)}")
         student = _check_likelihood(likelihood) == "student" and int(sigma_dof) > 0
+        if self.fixed_scores is not None:
+            return float(self.fixed_scores[(method, "student" if student else "gauss")])
         lik = student_term(self.chi2, n_data, sigma_dof) if student else float(self.chi2)
         if method == "laplace" and (self.occam is not None or self.n_params == 0):
             occam = self.occam_student if student and self.occam_student is not None else self.occam
@@ -254,6 +260,9 @@ class Weighing:
             legs = {c.id: list(c.legs) for c in getattr(e.payload, "effects", ()) if getattr(c, "located", False)}
             if legs:
                 row["legs"] = legs
+            if e.fixed_scores is not None:   # no fit: a summed family of placements
+                row["bic"] = float(e.fixed_scores[("bic", "gauss")])
+                row["placements"] = "the leg sets no fit weighed (linearized sum)"
             out.append(row)
         return out
 

@@ -322,6 +322,10 @@ def plan_measurements(model, readings, weighing, *, budget: int = 3, n_poses: in
     preload = float(case.loads.detailed_preload_N)
     levels = tuple(float(v) for v in (load_levels_N or (case.loads.detailed_test_N, 2.0 * case.loads.detailed_test_N)))
     ex, prob = list(weighing.explanations), np.asarray(weighing.probability, float)
+    # the rivals with a fit: a summed family of unfitted placements (Explanation.fixed_scores) has no prediction to
+    # discriminate; the plan's probabilities are renormalized over the fitted rivals
+    fitted = [i for i, e in enumerate(ex) if e.fixed_scores is None]
+    ex, prob = [ex[i] for i in fitted], prob[fitted] / prob[fitted].sum()
     order = np.argsort(-prob, kind="stable")
     ex, prob = [ex[i] for i in order], prob[order]
     # the top rivals: the fewest leading explanations holding ``coverage`` of the posterior (at least 2, at most

@@ -30,7 +30,7 @@ from femcheck.diagnose import evidence, residuals
 from femcheck.diagnose.lack_of_fit import structured_lack_of_fit
 from femcheck.diagnose.effects import effects as effect_registry
 from femcheck.diagnose.fitting import FitResult, fit_effects
-from femcheck.diagnose.placement import Placement, screen_placements
+from femcheck.diagnose.placement import Placement, screen_placements, unweighed_placements
 
 log = logging.getLogger(__name__)
 
@@ -337,6 +337,53 @@ def _key(ex: evidence.Explanation) -> frozenset:
     return frozenset(ex.payload.effects) if ex.payload is not None else frozenset(ex.ids)
 
 
+def _partner_leads(rivals, n_leads: int, bic_margin: float) -> list:
+    """The fits of the ``n_leads`` best non-located singles among ``rivals`` that beat none by ``bic_margin``."""
+    none = next(ex for ex in rivals if not ex.ids)
+    singles = sorted((ex for ex in rivals if len(ex.ids) == 1 and ex.payload is not None
+                      and not ex.payload.effects[0].located and ex.payload.bic < none.payload.bic - bic_margin),
+                     key=lambda ex: ex.payload.bic)
+    return [ex.payload for ex in singles[:n_leads]]
+
+
+def unweighed_explanations(model, readings, located, rivals, leads) -> list:
+    """One explanation per element type (alone, and with each lead of :func:`_partner_leads`) holding the evidence
+    of its placements that no fit weighed (:func:`femcheck.diagnose.placement.unweighed_placements`; issue 15
+    item 2): the posterior of a located cause is then summed over all its placements, the fitted ones exactly and
+    the others linearized. These explanations have no fit (``payload`` None, ``fixed_scores`` set): they count in
+    the marginal probability of their causes and in ``alternatives``, never as the named explanation."""
+    n_data = 3 * readings.n_states
+    sd = readings.sigma_dof
+
+    def weighed(others: tuple) -> dict:
+        # {element type id: leg sets fitted} among the explanations whose other causes are ``others``
+        out = {}
+        for ex in rivals:
+            effs = getattr(ex.payload, "effects", None)
+            if effs is None:
+                continue
+            loc = [e for e in effs if e.located]
+            if len(loc) == 1 and tuple(sorted(e.id for e in effs if not e.located)) == others:
+                out.setdefault(loc[0].id, set()).add(loc[0].legs)
+        return out
+
+    out = []
+    for lead in [None] + list(leads):
+        if lead is None:
+            others, background, base = (), None, None
+        else:
+            ex = _explanation(lead)
+            others, background = tuple(sorted(lead.ids)), (list(lead.effects), list(lead.values))
+            base = {(m, lik): ex.score(n_data, m, lik, sd) - (evidence.student_term(lead.chi2, n_data, sd)
+                                                              if lik == "student" and sd > 0 else lead.chi2)
+                    for m in evidence.EVIDENCE_METHODS for lik in evidence.LIKELIHOODS}
+        for eff, scores, legs, chi2 in unweighed_placements(model, readings, located, skip=weighed(others),
+                                                             background=background, base_scores=base, sigma_dof=sd):
+            k = len(legs) + (sum(len(v) for v in lead.values) if lead is not None else 0)
+            out.append(evidence.Explanation(others + (eff.id,), chi2, k, fixed_scores=scores))
+    return out
+
+
 def located_partners(model, readings, located, screened, rivals, *, n_leads: int = 1,
                      bic_margin: float = 10.0, siblings: bool = False) -> tuple[list, list]:
     """Placements of located causes beyond those in the full pool, and their explanations (issue 15 items 2, 3).
@@ -355,9 +402,9 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     Every new placement (not already among the rivals' effects: only when a screen changes its answer) is fitted
     alone and in a pair with each lead, and joins the rivals, weighed like the others with its extended-BIC
     penalty: the marginal probability of a located cause is then the sum over its weighed placements, and the mass
-    is split between element types or leg sets that fit alike. Approximation: the placements never weighed (the
-    element types not refined, leg sets not on the search paths, pairs of a new placement with a non-lead cause)
-    get no mass; their screened scores were worse by the screen's margin (10, a posterior ratio e^-5) or unknown.
+    is split between element types or leg sets that fit alike. The placements never fitted (the element types not
+    refined, leg sets not on the search paths) get their linearized mass from :func:`unweighed_explanations`, alone
+    and in a pair with the leads; pairs of a located type with a non-lead cause get none.
     The size prior shares each size's mass over the explanations weighed, so adding placements lowers each single's
     prior slightly. ``siblings`` (opt-in, ``diagnose(located_siblings=True)``): also weigh, for the located placement of
     the pool and the best re-screened one, the same legs with every other element type (a drive, a guideway and the two
@@ -371,9 +418,7 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     # a lead must beat none by the BIC margin. Not also every located single: a located placement that explains more
     # than any other cause alone can still be the wrong one for the pair (seed-1000 set 1038 of the calibration bench,
     # joint contact compliance + a spherical joint in some legs: with that condition the located cause got 0.005)
-    singles = sorted((ex for ex in rivals if len(ex.ids) == 1 and not ex.payload.effects[0].located
-                      and ex.payload.bic < none.payload.bic - bic_margin), key=lambda ex: ex.payload.bic)
-    leads = [ex.payload for ex in singles[:n_leads]]
+    leads = _partner_leads(rivals, n_leads, bic_margin)
     new = []
     for p in screened:   # the refined placements of other element types (the first max_located are in the pool)
         if p.effect not in have and all(p.effect != q.effect for q in new):
@@ -417,7 +462,7 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
              max_located: int = 1, evidence_method: str | None = None, likelihood: str | None = None,
-             partner_leads: int = 1, located_siblings: bool = False) -> Diagnosis:
+             partner_leads: int = 1, located_siblings: bool = False, unweighed_mass: bool = True) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
@@ -509,6 +554,9 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                                            n_leads=partner_leads if max_effects >= 2 and rivals_pairs else 0,
                                            bic_margin=bic_margin, siblings=located_siblings)
         rivals += extra
+    if located and max_located > 0 and unweighed_mass:
+        leads = _partner_leads(rivals, partner_leads, bic_margin) if max_effects >= 2 and rivals_pairs else []
+        rivals += unweighed_explanations(model, readings, located, rivals, leads)
     greedy_ids = tuple(e.id for e in chosen)
     greedy_key = frozenset(chosen)
     for ex in rivals:   # the greedy fit (joint, several starts) is at least as good as the warm-started rival
@@ -522,7 +570,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                        method=evidence_method, likelihood=likelihood)
     if greedy_ids and w.probability[0] < 0.01:
         # the evidence over all rivals contradicts the greedy path (e.g. a misfit it had to patch): name the leader
-        lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1]
+        lead = max(((p, ex) for p, ex in zip(w.probability, w.explanations) if ex.payload is not None),
+                   key=lambda t: t[0])[1]
         log.info("greedy %s has posterior %.3g; naming the evidence leader %s", "+".join(greedy_ids), w.probability[0],
                  lead.name)
         chosen, cur_fit = list(lead.payload.effects), lead.payload
@@ -536,7 +585,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     # detection limit that a vocabulary cause would fit is not "unexplained"
     lof = _lack_of_fit(readings, cur_fit)
     if lof.p_value < evidence.ALPHA and w.verdict != "unexplained":
-        lead = max(zip(w.probability, w.explanations), key=lambda t: t[0])[1].payload
+        lead = max(((p, ex) for p, ex in zip(w.probability, w.explanations) if ex.payload is not None),
+                   key=lambda t: t[0])[1].payload
         lof_lead = lof if lead is cur_fit else _lack_of_fit(readings, lead)
         if lof_lead.p_value < evidence.ALPHA:
             excess_none = _lack_of_fit(readings, base)
