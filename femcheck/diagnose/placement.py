@@ -236,13 +236,22 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
     return [p for p in out if p.score <= out[0].score + margin] if out else []
 
 
+#: placements whose linearized score is within this of the best get the chain's chi^2 at their step
+#: (:func:`subset_scores`); 20 = a posterior weight of e^-10 relative to the best
+NONLINEAR_MARGIN = 20.0
+
+#: largest leg-scale step (in the scale's units) whose linearized chi^2 is taken as it is (:func:`subset_scores`):
+#: the chain's response to a compliance scale is smooth, its second-order term ~ step^2 / 2 of the first
+LINEAR_STEP = 0.25
+
 #: every placement a located cause can take: the non-empty leg subsets of at most five legs (six legs is the
 #: element's all-legs cause), grouped by size
 SUBSETS_BY_SIZE = {k: np.array(list(itertools.combinations(range(6), k)), int) for k in range(1, 6)}
 
 
 def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.ndarray, n_data: int,
-                  sigma_dof: int = 0, lower: np.ndarray | None = None, chi2_at=None) -> tuple[list, dict]:
+                  sigma_dof: int = 0, lower: np.ndarray | None = None, chi2_at=None,
+                  chain_below: float = np.inf) -> tuple[list, dict]:
     """-2 ln evidence of every placement of one element type, each linearized about the same point (issue 15 item 2).
 
     ``G`` (N, 6): weighted Jacobian of the readings in the six leg scales; ``r0`` (N,): weighted residual at the
@@ -266,7 +275,13 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
     ``chi2_at``: a function of the steps X (n, 6) returning the chi^2 of the full model there (n,). Given, chi^2_L is
     that of the model at the MAP step, not the linear model's, and the prior penalty is added to it for Laplace: the
     linear model is exact for a small change and can promise a much better fit than the chain gives for a large one
-    (a guideway 3x softer in five legs, linear chi^2 119 against 186 at the same step); one batched evaluation.
+    (a guideway 3x softer in five legs, linear chi^2 119 against 186 at the same step). Only the placements within
+    :data:`NONLINEAR_MARGIN` of the best score are evaluated (one batched call per round, rounds until the best no
+    longer moves), and only those whose step exceeds :data:`LINEAR_STEP` in some leg; the others keep the linear
+    chi^2. Not at all when even the best linearized score is above
+    ``chain_below`` (an element type hopeless against the rivals already weighed: its mass is negligible whatever
+    the correction; the linear score is exact for the small steps where a type is close, and a large change is
+    fitted by the screen).
 
     Returns (subsets, scores): the (n_subsets,) leg tuples (1..5 legs, in :data:`SUBSETS_BY_SIZE` order) and
     {(method, likelihood): (n_subsets,) scores, "chi2": (n_subsets,) chi^2_L}. One batched solve per subset size."""
@@ -308,9 +323,20 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
         bic_extra.append(np.full(len(S), k * ln_n + pen))
         occam.append(quad - chi_k + logdet + 2.0 * log_mass[S].sum(axis=1) + pen)   # quad - chi_k: the prior penalty
     chi, bic_extra, occam = (np.concatenate(v) for v in (chi, bic_extra, occam))
-    if chi2_at is not None:
-        chi_nl = np.asarray(chi2_at(np.vstack(steps)), float)
-        chi = chi_nl      # the Occam part (prior penalty at the step, ln det, mass, placement) stays
+    if chi2_at is not None and float(np.min(chi + np.minimum(bic_extra, occam))) <= chain_below:
+        # the chain only where it can matter: the placements within NONLINEAR_MARGIN of the best score so far (a
+        # placement further off weighs < e^-10 of it); repeated while a correction moves the best (the linear
+        # model can be optimistic, and a placement that looked worse may then lead)
+        steps = np.vstack(steps)
+        # a small step is where the linear model is exact to second order: those keep the linear chi^2
+        done = np.abs(steps).max(axis=1) <= LINEAR_STEP
+        while True:
+            score = chi + np.minimum(bic_extra, occam)
+            todo = ~done & (score <= score.min() + NONLINEAR_MARGIN)
+            if not todo.any():
+                break
+            chi[todo] = np.asarray(chi2_at(steps[todo]), float)   # the Occam parts stay
+            done |= todo
     out = {}
     for lik in ("gauss", "student"):
         term = student_term(chi, n_data, sigma_dof) if lik == "student" and sigma_dof > 0 else chi
@@ -321,7 +347,7 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
 
 
 def unweighed_placements(model, readings, located, *, skip=None, background=None, base_scores=None,
-                         sigma_dof: int = 0) -> list[tuple[object, dict]]:
+                         sigma_dof: int = 0, hopeless_above: float = np.inf) -> list[tuple[object, dict]]:
     """The evidence of each located cause summed over the placements that no fit weighed (issue 15 item 2).
 
     A diagnosis fits a few placements of each element type (the screen's best, the partners, ...). The posterior of
@@ -335,7 +361,8 @@ def unweighed_placements(model, readings, located, *, skip=None, background=None
 
     ``skip``: {effect id: set of leg tuples already weighed}; ``base_scores``: {(method, likelihood): -2 ln evidence
     of the background cause minus its chi^2} (its Occam and penalty terms), added for a pair; the residual of the
-    background replaces the model's. Returns [(effect, {(method, likelihood): score}, best legs, their chi^2)] for
+    background replaces the model's. ``hopeless_above``: a -2 ln evidence (with the background's terms) beyond which
+    an element type's placements are not evaluated on the chain (:func:`subset_scores` ``chain_below``). Returns [(effect, {(method, likelihood): score}, best legs, their chi^2)] for
     every element type that has unweighed placements (the best by the Gaussian BIC, for the report)."""
     from scipy.special import logsumexp
 
@@ -344,18 +371,20 @@ def unweighed_placements(model, readings, located, *, skip=None, background=None
     J = leg_jacobians(model, readings, located, bg)
     n_data = 3 * readings.n_states
     out = []
+    # the background's own prediction: the same for every element column at its neutral scales
+    r0 = ((readings.disp - bg(located[0].column, bg.neutral(located[0].column))[0]) / readings.sigma).ravel()
     for eff, G in zip(located, J):
-        r0 = ((readings.disp - bg(eff.column, bg.neutral(eff.column))[0]) / readings.sigma).ravel()
         q = effect_prior(eff.restricted(range(6)), model)
-        lower = np.array([p.lower for p in eff.restricted(range(6)).params]) - bg.neutral(eff.column)
         x0 = bg.neutral(eff.column)
+        lower = np.array([p.lower for p in eff.restricted(range(6)).params]) - x0
 
-        def chi2_at(X, eff=eff, x0=x0):
+        def chi2_at(X, eff=eff, x0=x0, lower=lower):
             d = bg(eff.column, x0[None] + np.clip(X, lower, None))
             return (((readings.disp[None] - d) / readings.sigma[None]) ** 2).sum(axis=(1, 2))
 
+        base = min((base_scores or {}).get(("bic", "gauss"), 0.0), (base_scores or {}).get(("laplace", "gauss"), 0.0))
         subsets, scores = subset_scores(G, r0, q.sd, np.log(np.clip(q.mass, 1e-300, 1.0)), n_data, sigma_dof,
-                                        lower=lower, chi2_at=chi2_at)
+                                        lower=lower, chi2_at=chi2_at, chain_below=hopeless_above - base)
         done = (skip or {}).get(eff.id, set())
         keep = np.array([s not in done for s in subsets])
         if not keep.any():

@@ -337,6 +337,11 @@ def _key(ex: evidence.Explanation) -> frozenset:
     return frozenset(ex.payload.effects) if ex.payload is not None else frozenset(ex.ids)
 
 
+#: -2 ln evidence behind the best weighed rival beyond which the unweighed placements of an element type are not
+#: evaluated on the chain (:func:`unweighed_explanations`): a weight below e^-50
+UNWEIGHED_HOPELESS = 100.0
+
+
 def _partner_leads(rivals, n_leads: int, bic_margin: float) -> list:
     """The fits of the ``n_leads`` best non-located singles among ``rivals`` that beat none by ``bic_margin``."""
     none = next(ex for ex in rivals if not ex.ids)
@@ -367,6 +372,9 @@ def unweighed_explanations(model, readings, located, rivals, leads) -> list:
                 out.setdefault(loc[0].id, set()).add(loc[0].legs)
         return out
 
+    # an element type whose best placement is this far behind the best weighed rival holds < e^-50 of the mass
+    hopeless = min(ex.score(n_data, m, lik, sd) for ex in rivals for m in evidence.EVIDENCE_METHODS
+                   for lik in evidence.LIKELIHOODS) + UNWEIGHED_HOPELESS
     out = []
     for lead in [None] + list(leads):
         if lead is None:
@@ -378,7 +386,8 @@ def unweighed_explanations(model, readings, located, rivals, leads) -> list:
                                                               if lik == "student" and sd > 0 else lead.chi2)
                     for m in evidence.EVIDENCE_METHODS for lik in evidence.LIKELIHOODS}
         for eff, scores, legs, chi2 in unweighed_placements(model, readings, located, skip=weighed(others),
-                                                             background=background, base_scores=base, sigma_dof=sd):
+                                                             background=background, base_scores=base, sigma_dof=sd,
+                                                             hopeless_above=hopeless):
             k = len(legs) + (sum(len(v) for v in lead.values) if lead is not None else 0)
             out.append(evidence.Explanation(others + (eff.id,), chi2, k, fixed_scores=scores))
     return out
