@@ -297,8 +297,6 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
         AL = A[S[:, :, None], S[:, None, :]]                       # (n, k, k)
         cL = c[S][..., None]                                        # (n, k, 1)
         w = sd[S]                                                   # (n, k)
-        ridge = 1e-12 * np.trace(AL, axis1=1, axis2=2)[:, None, None] * np.eye(k)
-        chi_ls = np.maximum(chi0 - (cL * np.linalg.solve(AL + ridge, cL)).sum(axis=(1, 2)), 0.0)
         x_map = np.linalg.solve(AL + np.eye(k) / w[:, :, None] ** 2, cL)                          # (n, k, 1)
         quad = chi0 - (cL * x_map).sum(axis=(1, 2))          # chi^2 + prior penalty at the MAP point
         if lower is not None:
@@ -310,8 +308,7 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
                 quad[i] = float(np.sum((M @ x - np.concatenate([r0, np.zeros(k)])) ** 2))
         # chi^2 at the MAP point: the least-squares step of a weakly seen element can be a non-physical factor
         # (20x, or negative) that the prior rules out; the MAP step stays within what the prior allows
-        chi_k = np.maximum(chi0 - 2.0 * (cL * x_map).sum(axis=(1, 2))
-                           + (x_map * (AL @ x_map)).sum(axis=(1, 2)), chi_ls)
+        chi_k = np.maximum(chi0 - 2.0 * (cL * x_map).sum(axis=(1, 2)) + (x_map * (AL @ x_map)).sum(axis=(1, 2)), 0.0)
         logdet = np.linalg.slogdet(np.eye(k) + w[:, :, None] * AL * w[:, None, :])[1]
         pen = 2.0 * math.log(math.comb(6, k))
         subsets.extend(tuple(int(i) for i in row) for row in S)
@@ -362,8 +359,9 @@ def unweighed_placements(model, readings, located, *, skip=None, background=None
     ``skip``: {effect id: set of leg tuples already weighed}; ``base_scores``: {(method, likelihood): -2 ln evidence
     of the background cause minus its chi^2} (its Occam and penalty terms), added for a pair; the residual of the
     background replaces the model's. ``hopeless_above``: a -2 ln evidence (with the background's terms) beyond which
-    an element type's placements are not evaluated on the chain (:func:`subset_scores` ``chain_below``). Returns [(effect, {(method, likelihood): score}, best legs, their chi^2)] for
-    every element type that has unweighed placements (the best by the Gaussian BIC, for the report)."""
+    an element type's placements are not evaluated on the chain (:func:`subset_scores` ``chain_below``). Returns
+    [(effect, {(method, likelihood): score}, best legs, their chi^2)] for every element type that has unweighed
+    placements (the best by the Gaussian BIC, for the report)."""
     from scipy.special import logsumexp
 
     from femcheck.diagnose.prior import effect_prior
