@@ -1,6 +1,11 @@
-"""``femcheck identify CASE --world beam``: seed 002's workflow on femcheck's beam-FE world (issue 21 item 2).
+"""``femcheck identify CASE --world beam|bearings``: seed 002's workflow on a beam-FE world of the arm.
 
-The world (:mod:`femcheck.vjm.beam_world`) makes the measurements; :mod:`femcheck.vjm.world_identification`
+Two worlds make the measurements. ``beam`` (:func:`femcheck.vjm.beam_world.cobot7_world`) couples each joint by
+six springs at the extended model's own tilt places, with one stiffness scale set to seed 002's torsion share:
+the extended model fits it almost by construction, so it checks the assembly (world, identification, scoring),
+not the model. ``bearings`` (:func:`femcheck.vjm.bearing_world.cobot7_bearings_world`) takes drives and output
+bearings from catalogue data at their real places, with nothing chosen from the seed or the VJM case: it is the
+test of the extended model. In both, :mod:`femcheck.vjm.world_identification`
 identifies the conventional and the extended VJM on configurations 1-8 and scores them on 9-13 (and on
 random poses). This module prints the result beside seed 002's published figures. The arm is the KUKA
 LBR iiwa 7 R800's geometry, not the SHIR5's, and the world is femcheck's beam model, not the seed's FE
@@ -22,6 +27,11 @@ PAPER = {"error_mean_pct": {"conventional": 7.75, "extended": 3.74},
 
 GEOMETRY_NOTE = ("geometry: KUKA LBR iiwa 7 R800 (seed 002 does not publish the SHIR5's); world: femcheck's beam FE, "
                  "not the seed's solid FE model")
+#: what each world is for (printed and written to the JSON)
+WORLD_ROLE = {"beam": "check of the assembly: joints are the extended model's own springs at its tilt places, "
+                      "bearing scale set to seed 002's torsion share, so the extended model fits it by construction",
+              "bearings": "catalogue drives and output bearings (radial + axial springs at their real places), "
+                          "links and housings as beams; nothing set from seed 002's results or the VJM case"}
 
 
 class WorldOptionError(FemcheckError, ValueError):
@@ -39,13 +49,21 @@ def _share_stats(share, labels):
             "min": float(s.min()), "min_configuration": labels[int(s.argmin())]}
 
 
+def make_world(case, world: str):
+    """The world named by ``--world`` for a 7-joint case (ValueError for another arm)."""
+    if world == "bearings":
+        from femcheck.vjm.bearing_world import cobot7_bearings_world
+        return cobot7_bearings_world(case)
+    from femcheck.vjm.beam_world import cobot7_world
+    return cobot7_world(case)
+
+
 def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: float, seed: int, gravity: bool,
                    random_poses: int) -> None:
-    from femcheck.vjm.beam_world import cobot7_world
     from femcheck.vjm.world_identification import identify_on_world
 
-    if world != "beam":
-        raise WorldOptionError(f"--world {world!r}; expected 'beam'")
+    if world not in WORLD_ROLE:
+        raise WorldOptionError(f"--world {world!r}; expected 'beam' or 'bearings'")
     if not np.isfinite(noise_mm) or noise_mm < 0:
         raise WorldOptionError(f"--noise-mm {noise_mm:g}; expected a finite sigma >= 0 (mm)")
     if random_poses < 0:
@@ -53,7 +71,7 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
     if case.identification is None:
         raise WorldOptionError(f"{case_path}: [identification] is required for --world (the configurations and wrenches)")
     try:
-        w = cobot7_world(case)
+        w = make_world(case, world)
     except ValueError as e:
         raise WorldOptionError(f"{case_path}: {e}") from None
     st = identify_on_world(case, w, noise_mm=noise_mm, seed=seed, gravity=gravity, random_poses=random_poses)
@@ -62,7 +80,7 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
     lab1 = [s for s in st.label if not s.startswith("r")]
     summ = {k: st.summary(f) for k, f in st.fits.items()}
     out = {
-        "world": "beam", "case": case_path, "note": GEOMETRY_NOTE, "noise_mm": noise_mm, "seed": seed,
+        "world": world, "role": WORLD_ROLE[world], "case": case_path, "note": GEOMETRY_NOTE, "noise_mm": noise_mm, "seed": seed,
         "gravity": gravity, "wrenches": st.wrenches.tolist(),
         "configurations": [
             {"label": st.label[i], "set": "identification" if st.is_identification[i] else "verification",
@@ -85,6 +103,10 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         "world_torsion_share": _share_stats(st.world_torsion_share[table1, 0], lab1),
         "world_stiffness_Nm_per_rad": {"torsion": [b.torsion_Nm_per_rad for b in w.bearings],
                                        "tilt": [b.tilt_Nm_per_rad for b in w.bearings]},
+        "world_bearings": {"radial_N_per_m": [b.radial_N_per_m for b in w.bearings],
+                           "axial_N_per_m": [b.axial_N_per_m for b in w.bearings],
+                           "offset_m": [b.offset_m for b in w.bearings],
+                           "model_tilt_offset_m": [j.tilt_offset_m for j in case.joints]},
         "paper": PAPER,
     }
     if json_out:
@@ -93,7 +115,7 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         return
     p = len(st.wrenches)
     nid, nver = int(st.is_identification.sum()), int((table1 & ~st.is_identification).sum())
-    lines = [f"{case_path} on the beam world ({GEOMETRY_NOTE})",
+    lines = [f"{case_path} on the {world} world ({GEOMETRY_NOTE})", f"this world: {WORLD_ROLE[world]}",
              f"measurements: {nid} identification + {nver} verification configurations"
              + (f" + {random_poses} random poses" if random_poses else "")
              + f" x {p} wrenches; noise {noise_mm:g} mm; self-weight {'on' if gravity else 'off'}",

@@ -1,10 +1,12 @@
 """``femcheck identify``: joint compliances of a serial robot from measured tool deflections (seed 002 eqs. 9-12),
 or, on a ``parallel_vjm`` case (HISS), seed 001's weight fit with its Tables 2-4 (``femcheck.vjm.hiss_pipeline``).
 
-With ``--world beam`` (serial robot) no DATA.csv is read: femcheck's beam-FE world
-(``femcheck.vjm.beam_world``) makes the measurements, both models are identified and compared with seed 002's
-published errors (``femcheck.cli._identify_world``); with ``--make-data`` the world's measurements are written
-as DATA.csv instead.
+With ``--world beam|bearings`` (serial robot) no DATA.csv is read: a beam-FE world of the arm makes the
+measurements, both models are identified and compared with seed 002's published errors
+(``femcheck.cli._identify_world``); with ``--make-data`` the world's measurements are written as DATA.csv
+instead. ``beam`` is a check of the assembly, by construction (its joints are the extended model's springs at its
+tilt places); ``bearings`` (``femcheck.vjm.bearing_world``) is built from catalogue drives and bearings and is
+the test of the extended model.
 
 DATA.csv: header ``set,q1..qn,fx,fy,fz,mx,my,mz,dx,dy,dz``; ``set`` is ``identification`` or ``verification``;
 q in deg, wrench in N and N m at the tool point (base frame), deflection in m. Partial: no confidence
@@ -104,7 +106,7 @@ def register(app: typer.Typer) -> None:
         noise_deg: float = typer.Option(0.02, "--noise-deg", help="HISS: rotation noise sigma, deg (as --noise-mm)"),
         true_weights: str = typer.Option("table2-df", "--true-weights", help="HISS --make-data: W1..W11 as 11 numbers, or table2-df | table2-fd (seed 001 Table 2)"),
         seed: int = typer.Option(0, "--seed", help="HISS: seed of --make-data and of the fit's restarts; --world: seed of the noise and the random poses"),
-        world: str = typer.Option(None, "--world", help="serial robot: 'beam' = measure on femcheck's beam-FE world of the arm and compare both models with seed 002 (no DATA.csv)"),
+        world: str = typer.Option(None, "--world", help="serial robot, no DATA.csv: measure on a beam-FE world of the arm and compare both models with seed 002. 'bearings' = catalogue drives and output bearings at their real places (the test of the extended model); 'beam' = joints made of the extended model's own springs, a check of the assembly by construction"),
         gravity: bool = typer.Option(False, "--gravity", help="--world: the measurements include the self-weight deflection"),
         random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
@@ -122,7 +124,7 @@ def register(app: typer.Typer) -> None:
                            seed=seed, gravity=gravity, random_poses=random_poses)
             return
         if data_path is None:
-            raise IdentifyDataError("DATA.csv is required (or --world beam on a serial_robot case)")
+            raise IdentifyDataError("DATA.csv is required (or --world bearings|beam on a serial_robot case)")
         if case.kind == "parallel_vjm":
             noise_mm = 0.02 if noise_mm is None else noise_mm
             from femcheck.cli._identify_hiss import identify_hiss
@@ -136,15 +138,15 @@ def register(app: typer.Typer) -> None:
                 raise IdentifyDataError(f"{data_path}: exists; --make-data never overwrites a file")
             w = None
             if world is not None:
-                if world != "beam":
-                    raise IdentifyDataError(f"--world {world!r}; expected 'beam'")
-                from femcheck.vjm.beam_world import cobot7_world
-                w = cobot7_world(case)
+                from femcheck.cli._identify_world import WORLD_ROLE, make_world
+                if world not in WORLD_ROLE:
+                    raise IdentifyDataError(f"--world {world!r}; expected 'beam' or 'bearings'")
+                w = make_world(case, world)
             nmm = 0.0 if noise_mm is None else noise_mm
             if not np.isfinite(nmm) or nmm < 0:
                 raise IdentifyDataError(f"--noise-mm {nmm:g}; expected a finite sigma >= 0 (mm)")
             typer.echo(f"wrote {make_data(case, data_path, noise, seed=seed, world=w, noise_mm=nmm)} rows to {data_path}"
-                       + (" (beam world)" if w is not None else ""))
+                       + (f" ({world} world)" if w is not None else ""))
             return
         vjm = case.vjm()
         ext = model is VJMModel.extended

@@ -1,0 +1,106 @@
+"""A cobot "world" built from catalogue joint modules: the measurements that seed 002's extended VJM did not make.
+
+The beam world of :func:`femcheck.vjm.beam_world.cobot7_world` couples each joint by six springs placed at the
+extended model's own tilt places, with one stiffness scale chosen so that torsion gives seed 002's 76.5 % of the
+deflection; that the extended model fits it is close to true by construction (it is a check of the assembly).
+This module builds the same arm from data that no VJM chose:
+
+* **Drives.** Torsional stiffness K3 of the Harmonic Drive gear of each joint size (seed 002 names its joint
+  modules Joint32, Joint25 and Joint17, i.e. strain-wave gear sizes 32, 25 and 17; the iiwa-class arm of
+  ``cases/cobot7.toml`` uses the same three sizes): Harmonic Drive AG, *CHA series hollow shaft servo actuators,
+  engineering data* 1018854 08/2018, table 54.1/54.2, ratio > 50: K3 = 120, 57 and 16 x 10^3 N m/rad.
+* **Output bearings.** The joint's only output bearing (the actuator's integrated output bearing carries all
+  external loads; same manual, sec. 6.21), at its real axial place: pitch diameter ``dp`` and offset ``R`` of the
+  bearing centre behind the output flange from table 55.1 (size 32: 0.114 / 0.020 m, size 25: 0.088 / 0.018 m,
+  size 17: 0.058 / 0.014 m; static load rating C0 = 59.0, 45.0 and 17.1 kN). It is a ring of rolling elements
+  in a 90-degree V groove (crossed rollers at +-45 degrees; size 17's four-point ball bearing is treated the
+  same way): each element a line contact of steel on steel at both rings, ``k_n = pi l E* / 4`` (two contacts
+  ``pi l E*/2`` in series, :func:`femcheck.compliance.hertz_line_contact.line_contact_stiffness`). The element
+  size comes from the catalogue's C0 through ISO 76's static rating of a roller bearing,
+  ``C0 = 44 (1 - D cos a / dp) z l D cos a`` with ``l = D`` (crossed rollers are as long as they are thick),
+  ``a = 45 deg`` and ``z = pi dp / (1.25 D)`` (a spacer between rollers). Summed over the ring the elements
+  give radial ``z k_n / 4``, axial ``z k_n / 2`` and tilt ``axial dp^2 / 8`` (:meth:`Bearing.crossed_roller`):
+  radial and axial springs at their real places, whose tilt stiffness follows from their pitch circle.
+* **Interfaces.** The output flange of each joint sits where the next housing begins: along the roll joints'
+  axes 0.15, 0.21, 0.21 and 0.081 m from the joint-frame origin (A1, A3, A5, A7: the joint origins of the
+  iiwa 7's public description); for the pitch joints A2, A4, A6 at the outer radius of the housing tube that
+  carries them (0.070, 0.060 and 0.050 m). The bearing centre is ``R`` behind the flange, in the housing.
+* **Housings and links.** The beam world's tubes and tool, unchanged (:func:`cobot7_world`), from the joint-frame
+  origin along the axis to the bearing (housing) and from the bearing along the DH path to the next joint.
+
+Nothing here is set from seed 002's results or from the VJM case's springs; what the world's torsion share and
+the identified models' errors come out to is a result. The idealizations (rigid bearing rings, load-independent
+line contact, no clearance or preload dependence) make the bearings stiffer than a mounted catalogue bearing.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from femcheck.compliance.hertz_line_contact import line_contact_stiffness
+from femcheck.compliance.hertz_point_contact import effective_modulus
+from femcheck.vjm.beam_world import Bearing, BeamWorld, cobot7_world
+
+#: bearing steel (E, nu) of both rings and the rolling elements
+STEEL = (210e9, 0.3)
+#: ISO 76 static rating factor of a radial roller bearing, N/mm^2
+ISO76_ROLLER_FACTOR = 44.0
+#: element pitch over element diameter (spacer retainer between crossed rollers)
+SPACING = 1.25
+
+
+@dataclass(frozen=True)
+class JointModule:
+    """Catalogue data of one joint size (module docstring): ``size`` (gear size), ``torsion_Nm_per_rad`` (K3),
+    ``pitch_diameter_m`` (dp), ``flange_offset_m`` (R, bearing centre to output flange), ``static_rating_N`` (C0)."""
+
+    size: int
+    torsion_Nm_per_rad: float
+    pitch_diameter_m: float
+    flange_offset_m: float
+    static_rating_N: float
+
+    @property
+    def element_diameter_m(self) -> float:
+        """Rolling-element diameter D = l (m) that gives C0 under ISO 76 with z = pi dp / (1.25 D)."""
+        c = math.cos(math.radians(45.0))
+        dp = 1e3 * self.pitch_diameter_m                     # ISO 76 works in mm and N
+        # C0 = 44 (1 - D c / dp) (pi dp / (1.25 D)) D^2 c = (44 pi c / 1.25) (dp D - c D^2): a quadratic in D
+        a = ISO76_ROLLER_FACTOR * math.pi * c / SPACING
+        D = (dp - math.sqrt(dp * dp - 4 * c * self.static_rating_N / a)) / (2 * c)
+        return 1e-3 * D
+
+    @property
+    def element_count(self) -> int:
+        """Rolling elements on the pitch circle (even: half at +45, half at -45 degrees)."""
+        return 2 * int(math.pi * self.pitch_diameter_m / (SPACING * self.element_diameter_m) / 2)
+
+    def bearing(self, offset_m: float, mass_kg: float = 0.0) -> Bearing:
+        """The output bearing (radial, axial and, from its pitch circle, tilt springs) with the drive's torsion."""
+        E_star = effective_modulus(*STEEL, *STEEL)
+        k_n = float(line_contact_stiffness(self.element_diameter_m, E_star)) / 2   # two contacts in series
+        z = self.element_count
+        return Bearing.crossed_roller(self.torsion_Nm_per_rad, self.pitch_diameter_m, axial_N_per_m=z * k_n / 2,
+                                      radial_N_per_m=z * k_n / 4, offset_m=offset_m, mass_kg=mass_kg)
+
+
+#: Harmonic Drive CHA engineering data 1018854 08/2018 (module docstring): K3 (ratio > 50), dp, R, C0
+CHA_MODULES = {32: JointModule(32, 120e3, 0.114, 0.020, 59000.0),
+               25: JointModule(25, 57e3, 0.088, 0.018, 45000.0),
+               17: JointModule(17, 16e3, 0.058, 0.014, 17100.0)}
+#: joint sizes A1..A7 (seed 002: Joint32, Joint25, Joint17 from the shoulder to the wrist)
+COBOT7_SIZES = (32, 32, 25, 25, 17, 17, 17)
+#: output flange places along each joint axis from the joint-frame origin, m (module docstring)
+COBOT7_FLANGE_M = (0.15, 0.070, 0.21, 0.060, 0.21, 0.050, 0.081)
+
+
+def cobot7_bearings_world(case, **overrides) -> BeamWorld:
+    """The bearings world of ``cases/cobot7.toml`` (module docstring): the beam world's tubes, tool and drive
+    masses with catalogue drives and output bearings at their real places. ``overrides`` replace
+    :class:`BeamWorld` fields."""
+    base = cobot7_world(case)
+    bearings = tuple(CHA_MODULES[s].bearing(flange - CHA_MODULES[s].flange_offset_m, b.mass_kg)
+                     for s, flange, b in zip(COBOT7_SIZES, COBOT7_FLANGE_M, base.bearings))
+    world = dataclasses.replace(base, bearings=bearings)
+    return dataclasses.replace(world, **overrides) if overrides else world
