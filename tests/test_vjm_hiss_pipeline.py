@@ -116,6 +116,12 @@ def test_identify_cli_runs_the_workflow_on_a_parallel_case(tmp_path, capsys):
     assert set(res["setups"]) == {"D/F", "F/D", "D/F + F/D"}
     df = res["setups"]["D/F"]
     assert df["n"] == 65 and df["unidentifiable"] == ["W4", "W8"]
+    assert df["identified"] == [f"W{k}" for k in (1, 2, 3, 5, 6, 7, 9, 10, 11)]
+    # the eq. 10 reading table and TP3's isotropy come with every run (tests/test_vjm_hiss_consistency.py)
+    assert res["column_consistency"]["supported"] == res["stiffness_scaling"] == "linear"
+    assert set(res["column_consistency"]["readings"]) == {"linear", "quadratic"}
+    assert res["tp3_isotropy"]["nominal"]["ratio"] > 1
+    assert "not identified" in text and "largest/smallest" in text
     ok = [k for k in range(11) if k not in (3, 7)]
     np.testing.assert_allclose(np.array(df["weights"])[ok], np.array(TABLE2["D/F"][0])[ok], rtol=1e-4)
     for g in res["setups"].values():

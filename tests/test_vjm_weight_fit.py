@@ -2,6 +2,8 @@
 
 Virtual D/F experiments (``hiss_pipeline.virtual_experiment`` loads: 13 TPs x 5 random wrenches < 10 N, < 0.5 N m)
 on the case's assumed layout. Residuals are weighted by the noise, 0.02 mm / 0.02 deg (L = 1/sigma^2).
+``df_model`` reads eq. 10 as printed (quadratic, K' = W K W^T), the reading these figures were measured on;
+``df_model_linear`` is the case's default reading (stiffness proportional to w).
 """
 import numpy as np
 import pytest
@@ -24,7 +26,13 @@ def hiss():
 @pytest.fixture(scope="module")
 def df_model(hiss):
     d = hp.virtual_experiment(hiss, np.ones(11), setups=("D/F",), noise_mm=0, noise_deg=0, seed=1)
-    return hp.model_for(hiss, d.point, d.wrench)
+    return hp.model_for(hiss, d.point, d.wrench, reading="quadratic")
+
+
+@pytest.fixture(scope="module")
+def df_model_linear(hiss):
+    d = hp.virtual_experiment(hiss, np.ones(11), setups=("D/F",), noise_mm=0, noise_deg=0, seed=1)
+    return hp.model_for(hiss, d.point, d.wrench, reading="linear")
 
 
 def _fit(model, measured, seed=0, restarts=12, profile=True):

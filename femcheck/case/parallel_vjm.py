@@ -73,6 +73,9 @@ class Fitting:
     variance_threshold: float = quantity("-", default=0.1, doc="seed 001 sec. 5.1")
     restarts: int = quantity("-", default=8)
     top: int = quantity("-", default=5, doc="best runs used for the variance")
+    stiffness_scaling: Literal["linear", "quadratic"] = option(
+        "linear", doc="eq. 10 read as K'_jj = w K_jj (linear, the reading under which the three Table 2 columns "
+                      "predict the same device) or K'_jj = w^2 K_jj (quadratic, K' = W K W^T as printed)")
 
     def __post_init__(self):
         if len(self.weight_map) != 18:

@@ -45,12 +45,15 @@ def format_tables(results: dict, noise_mm: float, noise_deg: float) -> str:
         pub = name in TABLE2
         out.append(f"{name}: {g['n']} measurements; {g['restarts']} starts, {g['equivalent_runs']} as good as the best; "
                    f"E = {g['cost']:.4g} (residuals in units of {noise_mm:g} mm / {noise_deg:g} deg)")
-        out.append(f"  Table 2   fit      95 % interval         variance  unidentifiable because"
+        out.append(f"  Table 2   fit      95 % interval         variance  not identified because"
                    + ("                     | paper: fit  variance" if pub else ""))
         for k, w in enumerate(g["weights"]):
             wn = f"W{k + 1}"
-            why = ", ".join(g["reasons"].get(wn, [])) if wn in g["unidentifiable"] else ""
-            line = (f"  {wn:<8}{_fmt(w)}  [{_fmt(g['ci95_low'][k])}, {_fmt(g['ci95_high'][k])}]  {_fmt(g['variance'][k])}"
+            flagged = wn in g["unidentifiable"]
+            why = ", ".join(g["reasons"].get(wn, [])) if flagged else ""
+            # a flagged weight's best-fit value is one of many that fit: shown in parentheses, never as identified
+            val = f"({_fmt(w, 6)})" if flagged else _fmt(w)
+            line = (f"  {wn:<8}{val}  [{_fmt(g['ci95_low'][k])}, {_fmt(g['ci95_high'][k])}]  {_fmt(g['variance'][k])}"
                     f"  {why:<42}")
             if pub:
                 line += f"|  {_fmt(TABLE2[name][0][k])} {_fmt(TABLE2[name][1][k])}"
@@ -71,6 +74,25 @@ def format_tables(results: dict, noise_mm: float, noise_deg: float) -> str:
             if pub:
                 line += f"  |  {TABLE4[name][j][0][0]:.2f} / {TABLE4[name][j][1][0]:.2f}"
             out.append(line)
+    out.append("  weights in parentheses are not identified: their 95 % profile-likelihood interval spans more than a "
+               "factor 4 (or they are structural, at a bound, or spread over the restarts), whatever their variance")
+    return "\n".join(out)
+
+
+def format_consistency(cc: dict, iso: dict) -> str:
+    """The column-consistency table (1 kg deflections of the three Table 2 columns under both eq. 10 readings)
+    and TP3's isotropy ratio."""
+    cols = list(next(iter(cc["readings"].values()))["columns"])
+    out = [f"eq. 10 reading vs seed 001's own Table 2: largest deflection under {cc['load']}, mm (test point)",
+           "  reading     " + "".join(f"{c:>18}" for c in cols) + "   largest/smallest"]
+    for r, v in cc["readings"].items():
+        out.append(f"  {r:<11} " + "".join(f"{v['columns'][c]['max_mm']:>11.2f} ({v['columns'][c]['at']:>4})" for c in cols)
+                   + f"   {v['spread']:>8.2f}")
+    out.append(f"  the columns agree best under the {cc['supported']} reading; this case uses {cc['case_reading']}")
+    n = iso["nominal"]
+    out.append(f"TP3 translational compliance, largest / smallest: {n['ratio']:.2f} with nominal weights (1 = isotropic, "
+               "as seed 001 states); with the Table 2 weights: "
+               + "; ".join(f"{r}: " + ", ".join(f"{c} {iso[r][c]:.2f}" for c in cols) for r in cc["readings"]))
     return "\n".join(out)
 
 
@@ -94,11 +116,14 @@ def identify_hiss(case, case_path: str, data_path: str, *, json_out, make: bool,
         typer.echo(f"wrote {len(data.setup)} rows to {data_path} ({int(np.sum(data.setup == 'D/F'))} D/F, "
                    f"{int(np.sum(data.setup == 'F/D'))} F/D; noise {noise_mm:g} mm / {noise_deg:g} deg)")
         return
+    from femcheck.vjm.hiss_column_consistency import column_consistency, isotropy_table
     data = hp.read_csv(data_path, case)
     results = hp.run(case, data, noise_mm=noise_mm, noise_deg=noise_deg, restarts=restarts, seed=seed)
+    cc, iso = column_consistency(case), isotropy_table(case)
     if json_out:
         emit_json({"kind": "parallel_vjm", "units": {"translation": "mm", "rotation": "deg"},
-                   "noise": {"mm": noise_mm, "deg": noise_deg}, "setups": results}, json_out,
+                   "noise": {"mm": noise_mm, "deg": noise_deg}, "stiffness_scaling": case.fitting.stiffness_scaling,
+                   "setups": results, "column_consistency": cc, "tp3_isotropy": iso}, json_out,
                   inputs=[case_path, data_path])
     if json_out != "-":
-        typer.echo(format_tables(results, noise_mm, noise_deg))
+        typer.echo(format_tables(results, noise_mm, noise_deg) + "\n" + format_consistency(cc, iso))

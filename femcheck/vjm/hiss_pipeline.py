@@ -114,12 +114,14 @@ def measured_twists(case, data: HissData) -> np.ndarray:
     return np.column_stack([t[:, :3] + np.einsum("nij,nj->ni", R, r) - r, t[:, 3:]])
 
 
-def model_for(case, point, wrench):
-    """The :class:`RCubeWeightModel` of the case's layout at the measurements' test points."""
+def model_for(case, point, wrench, reading: str | None = None):
+    """The :class:`RCubeWeightModel` of the case's layout at the measurements' test points; ``reading`` of eq. 10
+    (default the case's ``[fitting] stiffness_scaling``)."""
     from femcheck.vjm.rcube_geometry import leg_jacobians, leg_poses
     from femcheck.vjm.rcube_weight_model import RCubeWeightModel
     Jt, Jp = leg_jacobians(leg_poses(case.rcube, platform_points(case)))
-    return RCubeWeightModel(Jt, Jp, case.K_theta, case.fitting.weight_map, point, wrench)
+    return RCubeWeightModel(Jt, Jp, case.K_theta, case.fitting.weight_map, point, wrench,
+                           case.fitting.stiffness_scaling if reading is None else reading)
 
 
 def _df_loads(rng, n):
@@ -194,6 +196,10 @@ def fit_group(case, data: HissData, select, noise_mm: float = 0.02, noise_deg: f
         "ci95_low": fit.ci_low.tolist(),
         "ci95_high": [None if not np.isfinite(v) else float(v) for v in fit.ci_high],
         "unidentifiable": [names[k] for k in np.flatnonzero(fit.unidentifiable)],
+        "identified": [names[k] for k in np.flatnonzero(~fit.unidentifiable)],
+        # hi / lo of the 95 % profile-likelihood interval (null = unbounded); above 4 the weight is flagged
+        "interval_ratio": [None if not np.isfinite(h / lo) else float(h / lo) if lo > 0 else None
+                           for lo, h in zip(fit.ci_low, fit.ci_high)],
         "reasons": {names[k]: list(fit.reasons[k]) for k in range(model.n_weights) if fit.reasons[k]},
         "cost": fit.cost,
         "restarts": fit.n_runs,
@@ -206,7 +212,8 @@ def fit_group(case, data: HissData, select, noise_mm: float = 0.02, noise_deg: f
 
 def run(case, data: HissData, noise_mm: float = 0.02, noise_deg: float = 0.02, restarts: int | None = None,
         seed: int = 0) -> dict:
-    """Every setup present, and their union when both are (the paper's three columns)."""
+    """Every setup present, and their union when both are (the paper's three columns), fitted under the case's
+    reading of eq. 10 (``[fitting] stiffness_scaling``)."""
     groups = [(s, data.setup == s) for s in SETUP_NAMES if np.any(data.setup == s)]
     if len(groups) == 2:
         groups.append(("D/F + F/D", np.ones(len(data.setup), bool)))

@@ -4,8 +4,9 @@ The fit of seed 001 eqs. 10-12 needs the model's platform twist ``x = K(w)^-1 F`
 for a robust solver and honest confidence intervals, its derivative with respect to ``s = log w``. Both
 are computed here in closed form (no finite differences; cond(K_i) ~ 1e9 makes differences unreliable).
 
-With ``D = diag(d(w))`` (eq. 12 map), ``K' = D K_theta D`` (eq. 10) and ``M_k = diag(dd/ds_k / d)`` (1 on
-the diagonal entries tied to weight k)::
+With ``D = diag(d(w))`` (eq. 12 map), ``K' = D K_theta D`` (eq. 10) and ``M_k = diag(dd/ds_k / d)`` (e/2 on
+the diagonal entries tied to weight k, e the exponent of the eq. 10 reading: ``d = w^(e/2)``, e = 2 as printed,
+e = 1 when the weight scales the stiffness linearly; ``weight_fitting.STIFFNESS_EXPONENT``)::
 
     dK'^-1/ds_k = -(K'^-1 M_k + M_k K'^-1)
     dC_i/ds_k   = J_theta dK'^-1/ds_k J_theta^T                      (C_i = J_theta K'^-1 J_theta^T, eq. 5)
@@ -22,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from femcheck.vjm.parallel_vjm import parallel_stiffness
-from femcheck.vjm.weight_fitting import expand_weights
+from femcheck.vjm.weight_fitting import STIFFNESS_EXPONENT, weight_factors
 
 
 class RCubeWeightModel:
@@ -30,10 +31,11 @@ class RCubeWeightModel:
 
     ``J_theta`` (L, m, 6, k) and ``J_phi`` (L, m, 6, p) at the m test points (``rcube_geometry.leg_jacobians``);
     ``K_theta`` (k, k) nominal virtual-joint stiffness of one leg; ``weight_map`` (k,) eq. 12;
-    ``point`` (N,) test-point index of each measurement; ``wrench`` (N, 6).
+    ``point`` (N,) test-point index of each measurement; ``wrench`` (N, 6); ``reading`` of eq. 10
+    (``linear`` | ``quadratic``).
     """
 
-    def __init__(self, J_theta, J_phi, K_theta, weight_map, point, wrench):
+    def __init__(self, J_theta, J_phi, K_theta, weight_map, point, wrench, reading: str = "quadratic"):
         self.Jt = np.asarray(J_theta, dtype=float)
         self.Jp = np.asarray(J_phi, dtype=float)
         self.K = np.asarray(K_theta, dtype=float)
@@ -41,12 +43,13 @@ class RCubeWeightModel:
         self.point = np.asarray(point, dtype=int)
         self.F = np.asarray(wrench, dtype=float).reshape(-1, 6)
         self.n_weights = int(self.map.max()) + 1
-        # (k, p) 0/1: diagonal entry j of W is tied to weight q
-        self._tie = (self.map[:, None] == np.arange(self.n_weights)[None, :]).astype(float)
+        self.reading = reading
+        # (k, p) d log d_j / d log w_q: e/2 where diagonal entry j is tied to weight q, else 0
+        self._tie = (self.map[:, None] == np.arange(self.n_weights)[None, :]) * (STIFFNESS_EXPONENT[reading] / 2)
 
     def platform_stiffness(self, w) -> tuple[np.ndarray, np.ndarray]:
         """(K_legs (L, m, 6, 6), K (m, 6, 6)) at the test points for weights w."""
-        d = expand_weights(w, self.map)
+        d = weight_factors(w, self.map, self.reading)
         return parallel_stiffness(self.Jt, d[:, None] * self.K * d[None, :], self.Jp)
 
     def predict(self, w) -> np.ndarray:
@@ -56,7 +59,7 @@ class RCubeWeightModel:
 
     def predict_and_jacobian(self, w) -> tuple[np.ndarray, np.ndarray]:
         """(x (N, 6), dx/dlog w (N, 6, p))."""
-        d = expand_weights(w, self.map)
+        d = weight_factors(w, self.map, self.reading)
         Kp = d[:, None] * self.K * d[None, :]
         Kl, K = parallel_stiffness(self.Jt, Kp, self.Jp)
         x = np.linalg.solve(K[self.point], self.F[..., None])[..., 0]           # (N, 6)

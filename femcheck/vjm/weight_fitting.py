@@ -43,9 +43,21 @@ def expand_weights(w: np.ndarray, weight_map) -> np.ndarray:
     return np.where(idx < 0, 1.0, np.asarray(w, dtype=float)[np.clip(idx, 0, None)])
 
 
-def scaled_stiffness(K_theta: np.ndarray, w: np.ndarray, weight_map) -> np.ndarray:
-    """K' = W K W^T with W = diag(expand_weights(w)) (seed 001 eq. 10)."""
-    d = expand_weights(w, weight_map)
+#: the two readings of seed 001 eq. 10, as the exponent of w in a diagonal stiffness entry: ``quadratic`` is
+#: ``K' = W K W^T`` as printed (K'_jj = w^2 K_jj), ``linear`` is ``K' = W^1/2 K W^1/2`` (K'_jj = w K_jj, the
+#: weight a stiffness factor). The case key ``[fitting] stiffness_scaling`` chooses; ``hiss_column_consistency``
+#: says which one the paper's own Table 2 supports.
+STIFFNESS_EXPONENT = {"linear": 1.0, "quadratic": 2.0}
+
+
+def weight_factors(w: np.ndarray, weight_map, reading: str = "quadratic") -> np.ndarray:
+    """Diagonal d (len(map),) of the congruence ``K' = D K D`` for the eq. 10 ``reading``: expand_weights(w)^(e/2)."""
+    return expand_weights(w, weight_map) ** (STIFFNESS_EXPONENT[reading] / 2)
+
+
+def scaled_stiffness(K_theta: np.ndarray, w: np.ndarray, weight_map, reading: str = "quadratic") -> np.ndarray:
+    """K' = D K D with D = diag(weight_factors(w)) (seed 001 eq. 10; ``quadratic``: D = W, as printed)."""
+    d = weight_factors(w, weight_map, reading)
     return d[:, None] * K_theta * d[None, :]
 
 
