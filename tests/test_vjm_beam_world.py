@@ -1,4 +1,9 @@
-"""The beam-FE world of the cobot (issue 21 item 2): closed forms, the VJM limits, and seed 002's outcome on it.
+"""The beam-FE world of the cobot: closed forms, the VJM limits, and seed 002's outcome on it.
+
+This world's joints are the extended model's own springs at its tilt places, with a bearing scale set to seed
+002's torsion share: the extended model's fit is close to exact by construction, so these tests check the
+assembly (world, identification, scoring). The test of the model is the bearings world
+(tests/test_vjm_bearing_world.py).
 
 Geometry caveat for every comparison with seed 002: the arm is the KUKA LBR iiwa 7 R800 (cases/cobot7.toml),
 not the SHIR5, whose joint geometry the seed does not publish; the world is femcheck's beam model, not the
@@ -142,11 +147,18 @@ def test_extended_model_beats_the_conventional_one_on_the_world(study):
 
 
 def test_with_measurement_noise_the_outcome_holds(case):
-    """0.02 mm noise (laser-tracker class) on deflections of 1.3-7.3 mm: measured conventional 9.23 %, extended
-    1.07 % mean over the 26 tests. The ratio stays below issue 21's 0.5 with a fixed seed."""
-    st = identify_on_world(case, cobot7_world(case), noise_mm=0.02, seed=0)
-    conv, ext = (st.summary(st.fits[k]) for k in ("conventional", "extended"))
-    assert ext["table1_all"]["mean"] <= 0.5 * conv["table1_all"]["mean"]
+    """0.02 mm noise (laser-tracker class) on deflections of 1.3-7.3 mm. The figures depend on the draw; two draws
+    are quoted, both from numpy default_rng(0) (``--seed 0``), mean over the 26 Table I tests:
+    * no random poses (this test): conventional 9.23 %, extended 1.07 %;
+    * ``--random-poses 20`` (the docs' example): conventional 8.91 %, extended 1.10 %; the 20 poses are drawn
+      first from the same generator, so the noise on the Table I tests is another draw.
+    The ratio stays below 0.5 in both."""
+    for poses, quoted in ((0, (9.23, 1.07)), (20, (8.91, 1.10))):
+        st = identify_on_world(case, cobot7_world(case), noise_mm=0.02, seed=0, random_poses=poses)
+        conv, ext = (st.summary(st.fits[k]) for k in ("conventional", "extended"))
+        assert ext["table1_all"]["mean"] <= 0.5 * conv["table1_all"]["mean"]
+        # the quoted figures are this draw's, as printed (2 decimals)
+        assert (round(conv["table1_all"]["mean"], 2), round(ext["table1_all"]["mean"], 2)) == quoted
 
 
 def test_what_of_the_published_numbers_compares(study):

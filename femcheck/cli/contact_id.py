@@ -1,5 +1,6 @@
-"""``femcheck contact-id CASE --frequencies f1,f2,...``: contact stiffness from measured natural
-frequencies (seed 004 §4). Normal (1-D bar, eqs. 20–31) or tangential (FE specimen, eq. 44)."""
+"""``femcheck contact-id CASE --frequencies f1,f2,... [--json OUT]``: contact stiffness from measured natural
+frequencies (seed 004 §4). Normal (1-D bar, eqs. 20–31) or tangential (FE specimen, eq. 44). ``--json`` takes
+an argument: a file, or ``-`` for one object on standard output."""
 from __future__ import annotations
 
 import math

@@ -1,12 +1,13 @@
-"""``femcheck deflect CASE --pose ... --wrench fx,fy,fz,mx,my,mz [--json]``: VJM tool-point deflection.
+"""``femcheck deflect CASE --pose ... --wrench fx,fy,fz,mx,my,mz [--json OUT]``: VJM tool-point deflection.
 
 * ``serial_robot`` case: ``--pose q1,...,qn`` joint angles in degrees.
 * ``parallel_vjm`` case: ``--pose x,y,z`` the platform point P in mm (base frame; the HISS is a 3-T
   device, its orientation is fixed), or the name of a test point of the case (``--pose TP3``).
 
 The wrench is SI (N, N m) in the base frame at the tool point. Prints the displacement (um) and rotation
-(mrad); ``--json`` prints one object with ``deflection`` = [dx, dy, dz, rx, ry, rz] (m, rad) and ``K``, the
-6x6 stiffness (N/m, N/rad, N m/rad; pseudo-inverse of the compliance at a singular posture, see ``rank``).
+(mrad); ``--json OUT`` writes one object instead (``--json -``: on standard output) with ``deflection`` =
+[dx, dy, dz, rx, ry, rz] (m, rad) and ``K``, the 6x6 stiffness (N/m, N/rad, N m/rad; pseudo-inverse of the
+compliance at a singular posture, see ``rank``).
 """
 from __future__ import annotations
 
