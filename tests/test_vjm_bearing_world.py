@@ -65,43 +65,87 @@ def test_bearings_sit_at_their_own_places_not_at_the_models_tilt_places(case):
     assert np.all(np.abs(off - np.array([j.tilt_offset_m for j in case.joints])) >= 0.003)
 
 
-def test_world_reduces_to_the_conventional_vjm_of_its_drives_when_the_structure_is_rigid(case):
-    """Rigid links and bearings leave the drives alone: the world is then the conventional VJM with the
-    catalogue K3 (closed form J K^-1 J^T W; 1e-9 relative, Cholesky round-off)."""
-    from femcheck.vjm.extended_vjm import virtual_jacobian
+def _gravity_torques(world, q):
+    """(m, n) each joint's torque from the arm's weight, N m: the moment about the joint axis of the nodal
+    weights of every body beyond it, summed directly (no stiffness involved)."""
+    from femcheck.vjm.beam_world import _layout, _self_weight
+    from femcheck.vjm.dh import forward_kinematics
+    fk = forward_kinematics(world.chain, q)
+    out = np.zeros((len(q), world.chain.n_joints))
+    for i in range(len(q)):
+        lay = _layout(world, fk, i)
+        f = _self_weight(world, lay).reshape(-1, 6)[:, :3]
+        for j in range(world.chain.n_joints):
+            ids = [k for body in lay.body_nodes[j + 1:] for k in body]
+            o, z = fk.joint_frames[i][j, :3, 3], fk.joint_frames[i][j, :3, 2]
+            out[i, j] = np.einsum("k,ik->", z, np.cross(lay.nodes[ids] - o, f[ids]))
+    return out
+
+
+@pytest.fixture(scope="module")
+def rigid_run(case):
     w = cobot7_bearings_world(case).with_rigid_structure()
-    q = np.radians(np.array(case.identification.configurations_deg[:3], dtype=float))
-    W = np.array(case.identification.wrenches[:1])
-    d = tcp_deflections(w, q, W).twist[:, 0]
+    q = np.radians(np.array(case.identification.configurations_deg[:4], dtype=float))
+    W = np.array(case.identification.wrenches)
+    return w, q, W, tcp_deflections(w, q, W)
+
+
+def test_drive_torques_of_the_solved_equilibrium_are_the_statics_of_the_loads(case, rigid_run):
+    """The serial arm is statically determinate: under the self-weight each drive carries the moment of the
+    weights beyond it about its axis, and a wrench adds J^T W (virtual work). The secant iteration's torques
+    must be these (1e-7 of the largest torque: the solve's round-off, K_z's condition number ~1e7 x 1e-16)."""
+    from femcheck.vjm.extended_vjm import virtual_jacobian
+    w, q, W, res = rigid_run
+    tau = res.drive_torque_Nm
+    scale = np.abs(tau).max()
+    np.testing.assert_allclose(tau[:, 0], _gravity_torques(w, q), rtol=0, atol=1e-7 * scale)
     J = virtual_jacobian(case.chain, q, extended=False)
-    k = np.array([CHA_MODULES[s].torsion_Nm_per_rad for s in COBOT7_SIZES])
-    ref = np.einsum("mik,k,mjk,j->mi", J, 1 / k, J, W[0])
-    np.testing.assert_allclose(d, ref, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(tau[:, 1:] - tau[:, :1], np.einsum("mik,pi->mpk", J, W), rtol=0, atol=1e-7 * scale)
+    assert np.all(res.iterations <= 3)                # exact torques after one solve, confirmed by the next
+    assert np.abs(tau[:, 0]).max() > 29.0             # the weight takes the shoulder beyond T1: the law matters
 
 
+def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and_loaded_torque(case, rigid_run):
+    """Rigid links and bearings leave the drives alone: the wrench's TCP twist is J dphi with, per drive, dphi =
+    phi(tau_g + J^T W) - phi(tau_g) of its catalogue law (closed form; 1e-7: torques to 1e-7 relative)."""
+    from femcheck.vjm.extended_vjm import virtual_jacobian
+    w, q, W, res = rigid_run
+    J = virtual_jacobian(case.chain, q, extended=False)
+    tg = _gravity_torques(w, q)
+    tw = np.einsum("mik,pi->mpk", J, W)
+    laws = [CHA_MODULES[s].torsion for s in COBOT7_SIZES]
+    dphi = np.stack([laws[j].angle(tg[:, None, j] + tw[:, :, j]) - laws[j].angle(tg[:, None, j])
+                     for j in range(7)], axis=-1)
+    ref = np.einsum("mik,mpk->mpi", J, dphi)
+    np.testing.assert_allclose(res.twist, ref, rtol=1e-7, atol=1e-7 * np.abs(ref).max())
+    k3 = np.array([CHA_MODULES[s].torsion_Nm_per_rad for s in COBOT7_SIZES])
+    linear = np.einsum("mik,mpk->mpi", J, tw / k3)
+    assert np.abs(res.twist - linear).max() > 0.1 * np.abs(linear).max()   # K1..K3, not K3 alone
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not met: with the catalogue's piecewise drive law (K1, K2, K3 over 0-T1-T2) at each pose's self-weight "
+    "torque, the extended model's error is 8.55 % mean against the conventional 8.96 % over the 26 Table I "
+    "tests (ratio 0.95; verification 12.96 % against 11.39 %): its two tilt springs per joint cannot hold a "
+    "drive stiffness that changes from pose to pose and wrench to wrench, and fit it with tilts that do not "
+    "carry to the verification poses. Nothing was tuned; the cited data give this."))
 def test_extended_model_halves_the_conventional_error_on_the_bearings_world(study):
     """Two-sided target, upper side: extended <= 0.5 x conventional (mean over the 26 Table I tests, and over
-    the verification tests 9-13). Measured noise-free: conventional 4.82 %, extended 0.18 %."""
+    the verification tests 9-13)."""
     conv, ext = (study.summary(study.fits[k]) for k in ("conventional", "extended"))
     assert ext["table1_all"]["mean"] <= 0.5 * conv["table1_all"]["mean"]
     assert ext["verification"]["mean"] <= 0.5 * conv["verification"]["mean"]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "not met: on the world built from catalogue data the extended model's error is 0.18 % mean / 0.44 % max "
-    "(noise-free), below the 0.5 % floor. The catalogue drives (K3) and ideal line-contact bearings leave "
-    "link bending as the only non-torsion compliance (rigid links: conventional 0.56 %, extended 0.01 %), and "
-    "21 springs lump the bending of round tubes closely (even with every bearing stiffness / 100 the extended "
-    "error stays at 0.48 %); a floor of 0.5 % needs compliance (bearing seats, "
-    "shell housings) that the cited data do not give, and setting it to reach the floor would be tuning."))
 def test_the_bearings_world_is_not_the_extended_model(study):
-    """Two-sided target, lower side: extended >= 0.5 % mean over the 26 tests (the world is not the model)."""
+    """Two-sided target, lower side: extended >= 0.5 % mean over the 26 tests (the world is not the model).
+    Measured noise-free 8.55 %: the drives' torsion follows the catalogue's piecewise law."""
     assert study.summary(study.fits["extended"])["table1_all"]["mean"] >= 0.5
 
 
 def test_torsion_share_is_reported_not_fitted(case, study):
     """The world's torsion share is the rigid-structure deflection projected on the full one; nothing sets it.
-    Measured 84.5 % mean (seed 002: 76.5 %). The check recomputes it from the two worlds (1e-12)."""
+    Measured 88.7 % mean (seed 002: 76.5 %). The check recomputes it from the two worlds (1e-12)."""
     w = cobot7_bearings_world(case)
     q = np.radians(np.array(case.identification.configurations_deg[:2], dtype=float))
     W = np.array(case.identification.wrenches)
@@ -123,8 +167,7 @@ def test_identify_world_bearings_json(capsys):
         for key in ("error_identification_pct", "error_verification_pct"):
             assert set(m[key]) == {"mean", "max"} and m[key]["max"] >= m[key]["mean"] > 0
         assert 0 < m["torsion_share"]["mean"] <= 100
-    assert res["models"]["extended"]["error_verification_pct"]["mean"] <= 0.5 * res["models"]["conventional"]["error_verification_pct"]["mean"]
-    assert res["world_torsion_share"]["mean"] == pytest.approx(84.5, abs=0.05)   # as printed, 1 decimal
+    assert res["world_torsion_share"]["mean"] == pytest.approx(88.7, abs=0.05)   # as printed, 1 decimal
 
 
 def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):

@@ -24,7 +24,9 @@ Solution. The nodal displacements are ``u = T z``: z holds the free node DOFs an
 motions in its finite directions. The distal node of a joint is its proximal node plus those relative
 motions, and with ``rigid_links`` every node of a body follows the body's first node rigidly. Then
 ``K_z = T^T K_beam T + diag(joint springs)``. It is factorized once per configuration (Cholesky), with
-all wrenches as right-hand sides. With rigid links and joints rigid except in torsion, ``T`` at the TCP is
+all wrenches as right-hand sides. A drive with a piecewise-linear torsion law (``Bearing.torsion_curve``,
+:mod:`femcheck.vjm.strain_wave_torsion`) makes the problem nonlinear; it is solved by secant iteration in the
+drive torques, per load state (:func:`tcp_deflections`). With rigid links and joints rigid except in torsion, ``T`` at the TCP is
 the geometric Jacobian and ``K_z = diag(k_torsion)``, so the world reduces exactly to the conventional VJM.
 """
 from __future__ import annotations
@@ -39,6 +41,7 @@ import scipy.linalg as sla
 
 from femcheck.fe.beam import BeamSection, assemble_beam_stiffness, line_mesh
 from femcheck.vjm.dh import DHChain, as_poses, forward_kinematics
+from femcheck.vjm.strain_wave_torsion import StrainWaveTorsion
 
 log = logging.getLogger(__name__)
 
@@ -75,7 +78,9 @@ class Bearing:
     ``torsion_Nm_per_rad``: the drive (about z). ``tilt_Nm_per_rad``: about x and y. ``radial_N_per_m``:
     along x and y. ``axial_N_per_m``: along z. ``math.inf`` makes a direction rigid. ``offset_m``: the
     bearing's place along the joint axis from the joint-frame origin, m. ``mass_kg``: the drive's mass,
-    for the self-weight.
+    for the self-weight. ``torsion_curve``: when given, the drive's torsion follows this piecewise-linear law
+    in its torque instead of the constant ``torsion_Nm_per_rad`` (which must then be the law's K3, the value
+    the catalogues list alone); :func:`tcp_deflections` solves the equilibrium for it.
     """
 
     torsion_Nm_per_rad: float
@@ -84,11 +89,15 @@ class Bearing:
     axial_N_per_m: float = math.inf
     offset_m: float = 0.0
     mass_kg: float = 0.0
+    torsion_curve: StrainWaveTorsion | None = None
 
     def __post_init__(self):
         for name in ("torsion_Nm_per_rad", "tilt_Nm_per_rad", "radial_N_per_m", "axial_N_per_m"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"Bearing.{name} = {getattr(self, name)}; expected > 0 (math.inf = rigid)")
+        if self.torsion_curve is not None and self.torsion_Nm_per_rad != self.torsion_curve.high_torque_stiffness_Nm_per_rad:
+            raise ValueError(f"Bearing.torsion_Nm_per_rad = {self.torsion_Nm_per_rad} with a torsion_curve; expected "
+                             f"its K3 = {self.torsion_curve.high_torque_stiffness_Nm_per_rad}")
 
     @classmethod
     def crossed_roller(cls, torsion_Nm_per_rad: float, pitch_diameter_m: float, axial_N_per_m: float,
@@ -136,7 +145,8 @@ class BeamWorld:
     def with_rigid_structure(self) -> "BeamWorld":
         """The same arm with rigid links and bearings: only the drives' torsion is left (the conventional VJM)."""
         return dataclasses.replace(self, rigid_links=True, bearings=tuple(
-            Bearing(torsion_Nm_per_rad=b.torsion_Nm_per_rad, offset_m=b.offset_m, mass_kg=b.mass_kg)
+            Bearing(torsion_Nm_per_rad=b.torsion_Nm_per_rad, offset_m=b.offset_m, mass_kg=b.mass_kg,
+                    torsion_curve=b.torsion_curve)
             for b in self.bearings))
 
 
@@ -191,11 +201,13 @@ def _skew(r):
 
 
 def _reduction(world: BeamWorld, lay: _Layout):
-    """(T (6N, nz), spring stiffness (nz,) with 0 on node DOFs): u = T z (module docstring)."""
+    """(T (6N, nz), spring stiffness (nz,) with 0 on node DOFs, torsion column of each joint (n,), -1 where
+    the drive is rigid): u = T z (module docstring)."""
     N = len(lay.nodes)
     cap = 6 * N + 6 * len(world.bearings)
     T = np.zeros((N, 6, cap))
     spring = np.zeros(cap)
+    torsion_col = np.full(len(world.bearings), -1)
     col = 0
     for b, ids in enumerate(lay.body_nodes):
         if b > 0:                                     # joint b: distal node = proximal node + relative motions
@@ -208,6 +220,8 @@ def _reduction(world: BeamWorld, lay: _Layout):
                 if np.isfinite(k):
                     T[dist, :, col] += Q[:, f]
                     spring[col] = k
+                    if f == 5:
+                        torsion_col[b - 1] = col
                     col += 1
         # body 0's first node is the clamped base (T = 0)
         ref = ids[0]
@@ -219,7 +233,7 @@ def _reduction(world: BeamWorld, lay: _Layout):
             else:
                 T[node, :, col:col + 6] = np.eye(6)
                 col += 6
-    return T[:, :, :col].reshape(6 * N, col), spring[:col]
+    return T[:, :, :col].reshape(6 * N, col), spring[:col], torsion_col
 
 
 def _self_weight(world: BeamWorld, lay: _Layout) -> np.ndarray:
@@ -248,17 +262,67 @@ def arm_mass_kg(world: BeamWorld) -> float:
 class WorldDeflections:
     """TCP deflections of a :class:`BeamWorld`: ``twist`` (m, p, 6) [dx, dy, dz, rx, ry, rz] in m and rad
     under each of the p wrenches (self-weight added when asked); ``self_weight`` (m, 6) the deflection
-    under the self-weight alone (zeros when not asked); ``n_dof`` (m,) reduced unknowns per configuration."""
+    under the self-weight alone (zeros when not asked); ``n_dof`` (m,) reduced unknowns per configuration.
+    With piecewise drives: ``drive_torque_Nm`` (m, p + 1, n) each drive's torque, N m, under the self-weight
+    alone (index 0) and under the self-weight plus wrench k (index k + 1), 0 for a drive without a curve;
+    ``iterations`` (m,) secant iterations to equilibrium. Both are None with constant drives."""
 
     twist: np.ndarray
     self_weight: np.ndarray
     n_dof: np.ndarray
+    drive_torque_Nm: np.ndarray | None = None
+    iterations: np.ndarray | None = None
+
+
+def _solve_piecewise_drives(world: BeamWorld, lay: _Layout, T, Kz, spring, torsion_col, W, tol: float = 1e-8,
+                            max_iter: int = 50):
+    """Equilibrium of one configuration whose drives follow their ``torsion_curve`` (:func:`tcp_deflections`).
+
+    Load states: the self-weight alone (s = 0) and the self-weight plus each wrench (s = 1..p). Secant
+    fixed point, all states at once: each curved drive's spring is its secant from zero torque,
+    ``k = T / phi(T)`` at the torque of the previous solve (K1 to start); the solve gives the torques
+    ``k z``; repeat until they change by less than ``tol`` of the largest (K_z's condition number, up to
+    about 1e7, times the round-off leaves ~1e-9). The arm is statically determinate, so the torques are
+    exact after the first solve and the second confirms them. Returns z (p + 1, nz), the
+    torques (p + 1, n) and the iterations."""
+    n = len(world.bearings)
+    curved = np.array([j for j, b in enumerate(world.bearings) if b.torsion_curve is not None and torsion_col[j] >= 0])
+    cols = torsion_col[curved]
+    curves = [world.bearings[j].torsion_curve for j in curved]
+    f_sw = T.T @ _self_weight(world, lay)
+    Tt = T[6 * lay.tcp:6 * lay.tcp + 6]
+    F = np.c_[f_sw, f_sw[:, None] + Tt.T @ W.T].T                  # (p + 1, nz)
+    K_lin = Kz.copy()
+    K_lin[cols, cols] -= spring[cols]                                # the curved drives enter per state
+    Ks = np.repeat(K_lin[None], len(F), axis=0)
+    k = np.array([[c.stiffness_Nm_per_rad[0] for c in curves]] * len(F))
+    tau_prev = None
+    for it in range(1, max_iter + 1):
+        Ks[:, cols, cols] = K_lin[cols, cols] + k
+        z = np.linalg.solve(Ks, F[:, :, None])[:, :, 0]
+        tau = k * z[:, cols]
+        k = np.stack([c.secant(0.0, tau[:, a]) for a, c in enumerate(curves)], axis=1)
+        if tau_prev is not None and np.abs(tau - tau_prev).max() <= tol * max(np.abs(tau).max(), 1.0):
+            break
+        tau_prev = tau
+    else:
+        raise RuntimeError(f"piecewise drives: no equilibrium after {max_iter} secant iterations")
+    torque = np.zeros((len(F), n))
+    torque[:, curved] = tau
+    return z, torque, it
 
 
 def tcp_deflections(world: BeamWorld, q, wrenches, gravity: bool = False) -> WorldDeflections:
     """TCP deflections at configurations ``q`` (m, n) rad under ``wrenches`` (p, 6) N, N m (base frame, at the
     TCP). One Cholesky factorization per configuration; the p wrenches (and the self-weight) are its
-    right-hand sides. ``gravity`` adds the self-weight's deflection to every wrench's."""
+    right-hand sides. ``gravity`` adds the self-weight's deflection to every wrench's.
+
+    Drives with a ``torsion_curve`` make the world nonlinear, and the arm's own weight sets their operating
+    torque: every configuration is then solved under the self-weight alone and under the self-weight plus
+    each wrench (:func:`_solve_piecewise_drives`), and a wrench's deflection is the difference of the two
+    states, what a measurement zeroed in the pose sees; each drive gives the secant of its law between its
+    torque under the self-weight and under the self-weight plus the wrench. ``gravity`` adds the
+    self-weight state's own deflection (from the unloaded arm), as before."""
     q = as_poses(world.chain, q)
     W = np.atleast_2d(np.asarray(wrenches, dtype=float))
     if W.shape[1] != 6:
@@ -267,15 +331,27 @@ def tcp_deflections(world: BeamWorld, q, wrenches, gravity: bool = False) -> Wor
     out = np.empty((len(q), len(W), 6))
     sw = np.zeros((len(q), 6))
     ndof = np.empty(len(q), dtype=int)
+    piecewise = any(b.torsion_curve is not None for b in world.bearings)
+    torque = np.zeros((len(q), len(W) + 1, len(world.bearings))) if piecewise else None
+    iterations = np.zeros(len(q), dtype=int) if piecewise else None
     for i in range(len(q)):
         lay = _layout(world, fk, i)
-        T, spring = _reduction(world, lay)
+        T, spring, torsion_col = _reduction(world, lay)
         Kz = np.diag(spring)
         if not world.rigid_links:
             for el, tube in lay.segments:
                 K = assemble_beam_stiffness(lay.nodes, el, tube.E_Pa, tube.G_Pa, tube.section, shear=world.shear)
                 Kz += T.T @ (K @ T)
         Tt = T[6 * lay.tcp:6 * lay.tcp + 6]           # (6, nz): TCP twist from z
+        ndof[i] = Kz.shape[0]
+        if piecewise:
+            z, torque[i], iterations[i] = _solve_piecewise_drives(world, lay, T, Kz, spring, torsion_col, W)
+            u = z @ Tt.T                              # (p + 1, 6)
+            out[i] = u[1:] - u[0]                     # the wrenches' part: loaded minus self-weight state
+            if gravity:
+                sw[i] = u[0]
+                out[i] += sw[i]
+            continue
         rhs = Tt.T @ W.T
         if gravity:
             rhs = np.c_[rhs, T.T @ _self_weight(world, lay)]
@@ -284,9 +360,8 @@ def tcp_deflections(world: BeamWorld, q, wrenches, gravity: bool = False) -> Wor
         if gravity:
             sw[i] = u[:, -1]
             out[i] += sw[i]
-        ndof[i] = Kz.shape[0]
     log.debug("beam world: %d configurations, %d-%d unknowns", len(q), ndof.min(), ndof.max())
-    return WorldDeflections(twist=out, self_weight=sw, n_dof=ndof)
+    return WorldDeflections(twist=out, self_weight=sw, n_dof=ndof, drive_torque_Nm=torque, iterations=iterations)
 
 
 def cobot7_world(case, **overrides) -> BeamWorld:

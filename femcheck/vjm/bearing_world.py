@@ -5,10 +5,24 @@ extended model's own tilt places, with one stiffness scale chosen so that torsio
 deflection; that the extended model fits it is close to true by construction (it is a check of the assembly).
 This module builds the same arm from data that no VJM chose:
 
-* **Drives.** Torsional stiffness K3 of the Harmonic Drive gear of each joint size (seed 002 names its joint
-  modules Joint32, Joint25 and Joint17, i.e. strain-wave gear sizes 32, 25 and 17; the iiwa-class arm of
-  ``cases/cobot7.toml`` uses the same three sizes): Harmonic Drive AG, *CHA series hollow shaft servo actuators,
-  engineering data* 1018854 08/2018, table 54.1/54.2, ratio > 50: K3 = 120, 57 and 16 x 10^3 N m/rad.
+* **Drives.** The torsion of the Harmonic Drive gear of each joint size (seed 002 names its joint modules
+  Joint32, Joint25 and Joint17, i.e. strain-wave gear sizes 32, 25 and 17; the iiwa-class arm of
+  ``cases/cobot7.toml`` uses the same three sizes), piecewise linear in the transmitted torque
+  (:class:`~femcheck.vjm.strain_wave_torsion.StrainWaveTorsion`): Harmonic Drive AG, *CHA series hollow shaft
+  servo actuators, engineering data* 1018854 08/2018, sec. 6.20 "Torsional stiffness" (p. 54), limit torques
+  and torsional stiffness, ratio > 50:
+
+  =====  ======  ======  ==========  ==========  ==========
+  size   T1 N m  T2 N m  K1 kN m/rad K2 kN m/rad K3 kN m/rad
+  =====  ======  ======  ==========  ==========  ==========
+  32     29      108     67          110         120
+  25     14      48      31          50          57
+  17     3.9     12      10          14          16
+  =====  ======  ======  ==========  ==========  ==========
+
+  The arm's own weight sets each drive's operating torque, so a test wrench sees the secant of the law between
+  the torques under the self-weight and under the self-weight plus the wrench, which differs from pose to pose
+  and from wrench to wrench (:func:`~femcheck.vjm.beam_world.tcp_deflections`).
 * **Output bearings.** The joint's only output bearing (the actuator's integrated output bearing carries all
   external loads; same manual, sec. 6.21), at its real axial place: pitch diameter ``dp`` and offset ``R`` of the
   bearing centre behind the output flange from table 55.1 (size 32: 0.114 / 0.020 m, size 25: 0.088 / 0.018 m,
@@ -31,6 +45,8 @@ This module builds the same arm from data that no VJM chose:
 Nothing here is set from seed 002's results or from the VJM case's springs; what the world's torsion share and
 the identified models' errors come out to is a result. The idealizations (rigid bearing rings, load-independent
 line contact, no clearance or preload dependence) make the bearings stiffer than a mounted catalogue bearing.
+The drives' hysteresis loss and lost motion (listed beside the stiffness, up to 1 arcmin each) are left out:
+the law is the catalogue's one curve for loading in both directions.
 """
 from __future__ import annotations
 
@@ -41,6 +57,7 @@ from dataclasses import dataclass
 from femcheck.compliance.hertz_line_contact import line_contact_stiffness
 from femcheck.compliance.hertz_point_contact import effective_modulus
 from femcheck.vjm.beam_world import Bearing, BeamWorld, cobot7_world
+from femcheck.vjm.strain_wave_torsion import StrainWaveTorsion
 
 #: bearing steel (E, nu) of both rings and the rolling elements
 STEEL = (210e9, 0.3)
@@ -52,14 +69,20 @@ SPACING = 1.25
 
 @dataclass(frozen=True)
 class JointModule:
-    """Catalogue data of one joint size (module docstring): ``size`` (gear size), ``torsion_Nm_per_rad`` (K3),
-    ``pitch_diameter_m`` (dp), ``flange_offset_m`` (R, bearing centre to output flange), ``static_rating_N`` (C0)."""
+    """Catalogue data of one joint size (module docstring): ``size`` (gear size), ``torsion`` (the gear's
+    piecewise torsion law: T1, T2, K1, K2, K3), ``pitch_diameter_m`` (dp), ``flange_offset_m`` (R, bearing
+    centre to output flange), ``static_rating_N`` (C0)."""
 
     size: int
-    torsion_Nm_per_rad: float
+    torsion: StrainWaveTorsion
     pitch_diameter_m: float
     flange_offset_m: float
     static_rating_N: float
+
+    @property
+    def torsion_Nm_per_rad(self) -> float:
+        """K3, the high-torque stiffness, N m/rad."""
+        return self.torsion.high_torque_stiffness_Nm_per_rad
 
     @property
     def element_diameter_m(self) -> float:
@@ -81,14 +104,16 @@ class JointModule:
         E_star = effective_modulus(*STEEL, *STEEL)
         k_n = float(line_contact_stiffness(self.element_diameter_m, E_star)) / 2   # two contacts in series
         z = self.element_count
-        return Bearing.crossed_roller(self.torsion_Nm_per_rad, self.pitch_diameter_m, axial_N_per_m=z * k_n / 2,
-                                      radial_N_per_m=z * k_n / 4, offset_m=offset_m, mass_kg=mass_kg)
+        b = Bearing.crossed_roller(self.torsion_Nm_per_rad, self.pitch_diameter_m, axial_N_per_m=z * k_n / 2,
+                                   radial_N_per_m=z * k_n / 4, offset_m=offset_m, mass_kg=mass_kg)
+        return dataclasses.replace(b, torsion_curve=self.torsion)
 
 
-#: Harmonic Drive CHA engineering data 1018854 08/2018 (module docstring): K3 (ratio > 50), dp, R, C0
-CHA_MODULES = {32: JointModule(32, 120e3, 0.114, 0.020, 59000.0),
-               25: JointModule(25, 57e3, 0.088, 0.018, 45000.0),
-               17: JointModule(17, 16e3, 0.058, 0.014, 17100.0)}
+#: Harmonic Drive CHA engineering data 1018854 08/2018 (module docstring): torsion law (T1, T2 in N m;
+#: K1, K2, K3 in N m/rad, ratio > 50), dp, R, C0
+CHA_MODULES = {32: JointModule(32, StrainWaveTorsion((29.0, 108.0), (67e3, 110e3, 120e3)), 0.114, 0.020, 59000.0),
+               25: JointModule(25, StrainWaveTorsion((14.0, 48.0), (31e3, 50e3, 57e3)), 0.088, 0.018, 45000.0),
+               17: JointModule(17, StrainWaveTorsion((3.9, 12.0), (10e3, 14e3, 16e3)), 0.058, 0.014, 17100.0)}
 #: joint sizes A1..A7 (seed 002: Joint32, Joint25, Joint17 from the shoulder to the wrist)
 COBOT7_SIZES = (32, 32, 25, 25, 17, 17, 17)
 #: output flange places along each joint axis from the joint-frame origin, m (module docstring)
