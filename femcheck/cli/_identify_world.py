@@ -103,6 +103,10 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         "world_torsion_share": _share_stats(st.world_torsion_share[table1, 0], lab1),
         "world_stiffness_Nm_per_rad": {"torsion": [b.torsion_Nm_per_rad for b in w.bearings],
                                        "tilt": [b.tilt_Nm_per_rad for b in w.bearings]},
+        "world_drive_torsion": [None if b.torsion_curve is None else
+                                {"limit_torques_Nm": list(b.torsion_curve.limit_torques_Nm),
+                                 "stiffness_Nm_per_rad": list(b.torsion_curve.stiffness_Nm_per_rad)}
+                                for b in w.bearings],
         "world_bearings": {"radial_N_per_m": [b.radial_N_per_m for b in w.bearings],
                            "axial_N_per_m": [b.axial_N_per_m for b in w.bearings],
                            "offset_m": [b.offset_m for b in w.bearings],
@@ -126,6 +130,9 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         lines.append(f"  {jt.name or j + 1:>5} {1e-3 * w.bearings[j].torsion_Nm_per_rad:11.1f} {1e-3 * w.bearings[j].tilt_Nm_per_rad:11.1f}"
                      f" | {1e-3 / conv.compliance[j]:12.2f} | {ce[0]:17.2f} {ce[1]:8.2f} {ce[2]:8.2f}")
     lines.append(f"  cond(A): conventional {conv.cond_A:.3g}, extended {ext.cond_A:.3g}")
+    if any(b.torsion_curve is not None for b in w.bearings):
+        lines.append("  world drives: piecewise linear in the torque (K1, K2, K3 over 0-T1, T1-T2, > T2; K3 shown); each "
+                     "wrench sees the secant between the self-weight torque and the loaded one")
     lines.append("relative deflection error |dx_model - dx| / |dx|, % (one column per wrench); torsion share of the world, wrench 1")
     lines.append("  config  set           |dx| mm        conventional        extended    world torsion")
     for i, lab in enumerate(st.label):
