@@ -122,7 +122,9 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
     lines = [f"{case_path} on the {world} world ({GEOMETRY_NOTE})", f"this world: {WORLD_ROLE[world]}",
              f"measurements: {nid} identification + {nver} verification configurations"
              + (f" + {random_poses} random poses" if random_poses else "")
-             + f" x {p} wrenches; noise {noise_mm:g} mm; self-weight {'on' if gravity else 'off'}",
+             + f" x {p} wrenches; noise {noise_mm:g} mm; self-weight {'on' if gravity else 'off'}"
+             + (" (in the drives' torque, zeroed in the measurement)" if not gravity and any(
+                 b.torsion_curve is not None for b in w.bearings) else ""),
              "identified stiffness, kN m/rad (world: drive torsion / bearing tilt)",
              "  joint  world tors  world tilt | conventional | extended: torsion   tilt x   tilt y"]
     for j, jt in enumerate(case.joints):
