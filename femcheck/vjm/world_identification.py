@@ -1,4 +1,4 @@
-"""Seed 002's identification workflow run against a world that no VJM made (issue 21 item 2).
+"""Seed 002's identification workflow run against a world that no VJM made.
 
 The "measurements" are the TCP translations of a :class:`~femcheck.vjm.beam_world.BeamWorld` under the case's
 ``[identification]`` wrenches, at the identification configurations (seed 002 Table I, 1-8) and the
