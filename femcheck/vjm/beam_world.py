@@ -26,8 +26,9 @@ motions, and with ``rigid_links`` every node of a body follows the body's first 
 ``K_z = T^T K_beam T + diag(joint springs)``. It is factorized once per configuration (Cholesky), with
 all wrenches as right-hand sides. A drive with a piecewise-linear torsion law (``Bearing.torsion_curve``,
 :mod:`femcheck.vjm.strain_wave_torsion`) makes the problem nonlinear; it is solved by secant iteration in the
-drive torques, per load state (:func:`tcp_deflections`). With rigid links and joints rigid except in torsion, ``T`` at the TCP is
-the geometric Jacobian and ``K_z = diag(k_torsion)``, so the world reduces exactly to the conventional VJM.
+drive torques, per load state (:func:`tcp_deflections`). With rigid links and joints rigid except in
+torsion, ``T`` at the TCP is the geometric Jacobian and ``K_z = diag(k_torsion)``, so the world reduces
+exactly to the conventional VJM (with piecewise drives: of their secant stiffnesses).
 """
 from __future__ import annotations
 
@@ -95,7 +96,8 @@ class Bearing:
         for name in ("torsion_Nm_per_rad", "tilt_Nm_per_rad", "radial_N_per_m", "axial_N_per_m"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"Bearing.{name} = {getattr(self, name)}; expected > 0 (math.inf = rigid)")
-        if self.torsion_curve is not None and self.torsion_Nm_per_rad != self.torsion_curve.high_torque_stiffness_Nm_per_rad:
+        k3 = None if self.torsion_curve is None else self.torsion_curve.high_torque_stiffness_Nm_per_rad
+        if k3 is not None and self.torsion_Nm_per_rad != k3:
             raise ValueError(f"Bearing.torsion_Nm_per_rad = {self.torsion_Nm_per_rad} with a torsion_curve; expected "
                              f"its K3 = {self.torsion_curve.high_torque_stiffness_Nm_per_rad}")
 
@@ -286,7 +288,8 @@ def _solve_piecewise_drives(world: BeamWorld, lay: _Layout, T, Kz, spring, torsi
     exact after the first solve and the second confirms them. Returns z (p + 1, nz), the
     torques (p + 1, n) and the iterations."""
     n = len(world.bearings)
-    curved = np.array([j for j, b in enumerate(world.bearings) if b.torsion_curve is not None and torsion_col[j] >= 0])
+    curved = np.array([j for j, b in enumerate(world.bearings) if b.torsion_curve is not None and torsion_col[j] >= 0],
+                      dtype=int)
     cols = torsion_col[curved]
     curves = [world.bearings[j].torsion_curve for j in curved]
     f_sw = T.T @ _self_weight(world, lay)
