@@ -223,16 +223,18 @@ def joint_table_html(rows: list[dict]) -> str:
 
 
 def joint_table_section(rows: list[dict]):
-    """The joint table as a :class:`femcheck.verify.render.Section` (issue 14 part 3): what the verify
-    report appends (``sections.append(joint_table_section(joint_table_rows(results)))``) once the joint
-    contact FE runs inside ``make verify`` (not wired yet: docs/joint_fe.md, status)."""
+    """The joint table as a :class:`femcheck.verify.render.Section` of the verify report's "joints" part:
+    ``sections.append(joint_table_section(joint_table_rows(results)))``."""
     from femcheck.verify.render import Section
 
     flagged = [f"{r['joint']} {r['component']}: {r['better_law']}" for r in rows if r["off_by_more_than_10pct"]]
     note = ("Contact FE of each passive joint at the eq. 1 loads vs the closed-form joint laws (seed 000 §4.4.1); "
-            "compliances in SI (m/N, rad/(N m)). " + ("Off by more than 10 %: " + "; ".join(flagged) + "."
-                                                        if flagged else "Every law within 10 %."))
+            "compliances in SI (m/N for forces, rad/(N m) for moments), error_pct = 100 (FE - analytical) / "
+            "analytical. " + ("Off by more than 10 %: " + "; ".join(flagged) + "." if flagged else "Every law within 10 %."))
     keys = ("joint", "component", "fe_compliance", "analytical_compliance", "error_pct", "off_by_more_than_10pct")
     return Section("Joint table: contact FE vs the analytical joint laws",
                    tuple({k: r[k] for k in keys} for r in rows),
-                   {"fe_compliance": ".4g", "analytical_compliance": ".4g", "error_pct": "+.1f"}, note=note)
+                   {"fe_compliance": "{:.4g}", "analytical_compliance": "{:.4g}", "error_pct": "{:+.1f}"}, note=note,
+                   part="joints", explain={"fe_compliance": "the contact FE gives no compliance for this component",
+                                           "analytical_compliance": "the closed-form law has no term for this component",
+                                           "error_pct": "no error without both compliances"})

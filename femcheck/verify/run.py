@@ -78,7 +78,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
     tabs = {}
     t0 = time.perf_counter()
     sections.append(Section(f"Analytical vs FE (mesh {fe.mesh.level}: guideway {fe.mesh.guideway_m * 1e3:g} mm, "
-                            f"link {fe.mesh.link_m * 1e3:g} mm, {fe.kind} parts)"))
+                            f"link {fe.mesh.link_m * 1e3:g} mm, {fe.kind} parts)", part="errors"))
     for level in fe.levels:
         load = case.loads.simplified_test_N if level == "simplified" else case.loads.detailed_test_N
         variants = [None]
@@ -96,7 +96,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
                 tabs[(level, j, fe_joints or j)] = tab
                 what = f"{j} joints" if fe_joints is None else f"{j} analytical joints vs contact-joint FE"
                 sections.append(Section(f"{level.capitalize()} analytical vs {level} FE, {what} (relative error at "
-                                        f"{load:g} N, %)", tuple(tab), _fmt(tab, "{:.2f}"), note=note))
+                                        f"{load:g} N, %)", tuple(tab), _fmt(tab, "{:.2f}"), note=note, part="errors"))
                 note = ""
         if level == "detailed" and has_contact_joints(fe):
             from femcheck.verify.contact_joints import moment_demand
@@ -104,7 +104,8 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
             put("contact_joints.md", text + "\n" + (tables.to_markdown(trows) if trows else ""))
             if trows:
                 put("contact_joint_tilt.csv", tables.to_csv(trows))
-            sections.append(Section("Which idealization the contact FE follows", tuple(trows), note=text))
+            sections.append(Section("Which idealization the contact FE follows", tuple(trows), note=text, part="errors",
+                                    informational=True))
         for d in fe.directions:
             series = {f"{src} {j}": [(av.deflection(p, d, level, j) if src == "analytical" else fe.deflection(p, d, level, j))
                                      for p in fe.points] for j in JOINTS for src in ("analytical", "FE")}
@@ -122,7 +123,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
                      fe.deflection(p, d, "detailed", "released") for d in fe.directions}} for p in fe.points]
         put("fe_detailed_released_over_rigid.csv", tables.to_csv(ratio))
         sections.append(Section("Detailed FE: released / rigid and contact / released deflection ratios", tuple(ratio),
-                                _fmt(ratio, "{:.2f}")))
+                                _fmt(ratio, "{:.2f}"), informational=True))
     from femcheck.chain import ELEMENT_NAMES, ELEMENTS
     lvl = "detailed" if "detailed" in fe.levels else "simplified"
     shares = {}
@@ -137,7 +138,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
     put("fe_contributions.csv", tables.to_csv(crow))
     sections.append(Section(f"Contributions, {lvl} level: analytical vs FE (share of strain energy, seed 000 Fig. 23)",
                             tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
-                            images=(("fe_contributions.png", png, "FE contributions"),)))
+                            images=(("fe_contributions.png", png, "FE contributions"),), informational=True))
     t_tables = time.perf_counter() - t0
     t0 = time.perf_counter()
     n_vtu = 0
@@ -229,7 +230,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         er = error_rows(av, joints)
         put(f"simplified_vs_detailed_{joints}.csv", tables.to_csv(er))
         sections.append(Section(f"Simplified vs detailed analytical model, {joints} joints (relative error at "
-                                f"{case.loads.detailed_test_N:g} N, %)", tuple(er), _fmt(er, "{:.1f}")))
+                                f"{case.loads.detailed_test_N:g} N, %)", tuple(er), _fmt(er, "{:.1f}"),
+                                informational=True))
     shares = {j: av.mean_contributions(j) for j in JOINTS}
     crow = [{"element": e, **{f"{j} %": 100 * shares[j][e] for j in JOINTS}} for e in shares[JOINTS[0]]]
     put("contributions.csv", tables.to_csv(crow))
@@ -237,7 +239,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     put("contributions.png", png)
     sections.append(Section("Contributions of the compliant elements, detailed model (%, CONVENTIONS.md §7, seed 000 "
                             "Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
-                            images=(("contributions.png", png, "contributions"),)))
+                            images=(("contributions.png", png, "contributions"),), informational=True))
     for d in av.directions:
         series = {f"{lvl} {j}": [av.deflection(p, d, lvl, j) * (case.loads.detailed_test_N / (case.loads.simplified_test_N if lvl == 'simplified' else case.loads.detailed_test_N))
                                  for p in av.points] for lvl in LEVELS for j in JOINTS}
@@ -248,8 +250,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     cond_rows = conditioning_rows(av)
     put("conditioning.csv", tables.to_csv(cond_rows))
     sections.append(Section("Conditioning (Jacobian homogenized with R_p; K_T in twists [d; R_p theta], detailed, "
-                            "worst direction)", tuple(cond_rows), _fmt(cond_rows, "{:.3f}")))
-    sections.append(Section("Deflections (mm)", tuple(rows), DEFLECTION_FMT))
+                            "worst direction)", tuple(cond_rows), _fmt(cond_rows, "{:.3f}"), informational=True))
+    sections.append(Section("Raw deflections, analytical models (mm)", tuple(rows), DEFLECTION_FMT, part="raw",
+                            informational=True, collapsed=True))
 
     fe_tabs, fe_times = ({}, {})
     contact_diag = None
@@ -274,8 +277,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                                                         indent=2, default=float) + "\n")
             drows = contact_diag.summary_rows()
             sections.append(Section(
-                "Contact FE as a virtual experiment, diagnosed (femcheck diagnose, issue 7)", tuple(drows),
-                {"held-out error before %": "{:.2f}", "held-out error after %": "{:.2f}"},
+                "Contact FE as a virtual experiment, diagnosed (femcheck diagnose)", tuple(drows),
+                {"held-out error before %": "{:.2f}", "held-out error after %": "{:.2f}"}, part="contact_diagnosis",
+                informational=True,
                 note="Readings of the paper's protocol (9 points, +-x +-y +-z, preload 5 N, 3 trials, noise, 0.01 mm "
                      "dials) from the detailed FE with contact joints, diagnosed against the detailed analytical model: "
                      "which cause femcheck names and the held-out error before and after (files contact_fe_*.csv/json)."))
@@ -289,10 +293,18 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         put("coverage.json", json.dumps(coverage.as_json(), indent=2, default=float) + "\n")
         cov_rows = coverage.rows()
         put("coverage.csv", tables.to_csv(cov_rows))
+        caught = [r["element"] for r in cov_rows if r["detected"]]
+        missed = [r["element"] for r in cov_rows if not r["detected"]]
         sections.append(Section(
-            f"Verification coverage: {coverage.covered_share_pct:.1f} % of the detailed compliance is checked by the FE",
-            tuple(cov_rows), first=True,
-            note=f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
+            "Verification coverage: which element laws the FE checks",
+            tuple(cov_rows), part="coverage",
+            explain={"min_detectable_pct": "no mutation of this law is caught (the error does not move, or the FE "
+                                           "reuses the law)"},
+            note=f"The mutation of {coverage.mutation_pct:+g} % is caught for: {', '.join(caught) or 'none'}; not "
+                 f"caught for: {', '.join(missed) or 'none'} (column detected). The elements with a finite "
+                 f"min_detectable_pct carry {coverage.covered_share_pct:.1f} % of the detailed compliance: a larger "
+                 "error of their laws would be caught. "
+                 f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
                  f"analytical ({coverage.analytical_joints}) and FE ({coverage.fe_joints} joints) rerun at "
                  f"{', '.join(coverage.points)}. fe_source from behaviour: 'meshed' when the FE does not move with the "
                  "law (an independent model; 'contact_fe' where that model is the joint's contact FE), "
@@ -311,7 +323,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         fmt = {k: "{:.4f}" if k.endswith("_mm") else "{:.2f}" for k in conv_rows[0] if k.endswith(("_mm", "_%"))}
         sections.append(Section(f"Mesh convergence at {convergence_point} (deflection mm; change vs the fine mesh %, "
                                 f"acceptance: default within {100 * CONVERGENCE_TOL:.0f} %)", tuple(conv_rows), fmt,
-                                extra_rows=tuple(conv_mesh)))
+                                extra_rows=tuple(conv_mesh), part="convergence"))
         worst = max(r["default_vs_fine_%"] for r in conv_rows)
         conv_info = {"point": convergence_point, "meshes": conv_mesh, "default_vs_fine_max_pct": round(worst, 4),
                      "seconds": round(time.perf_counter() - tc, 2)}
@@ -335,7 +347,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         checks.append(conv_check)
     failures = [c.detail for c in checks if c.status == "fail" and not c.name.endswith(" drift")]
     if check and drift:
-        sections.append(Section("Regression check: drifted values", pre="\n".join(drift)))
+        sections.append(Section("Regression check: drifted values", pre="\n".join(drift), part="errors"))
     worst_err = worst_errors(fe_tabs)
     seconds = time.perf_counter() - t0
     sections.append(verdict_section(checks, worst_err, seconds))
