@@ -72,6 +72,18 @@ def _fmt(rows, spec, skip=("point",)) -> dict:
     return {k: spec for k in rows[0] if k not in skip}
 
 
+#: which points get a VTU of their deformed FE models: the first (default), every point, or none
+VTU_CHOICES = ("first", "all", "none")
+
+
+def vtu_points(vtu, points) -> tuple:
+    """The points whose VTU is written for ``vtu`` (one of :data:`VTU_CHOICES`; True/False: 'first'/'none')."""
+    which = {True: "first", False: "none"}.get(vtu, vtu)
+    if which not in VTU_CHOICES:
+        raise ValueError(f"vtu = {vtu!r}; expected one of {', '.join(VTU_CHOICES)}")
+    return {"first": tuple(points[:1]), "all": tuple(points), "none": ()}[which]
+
+
 def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: bool, tilt=None) -> tuple[dict, dict]:
     """Tables, plots and files of the FE comparison; appends its sections; returns the error tables and timings."""
     from femcheck.fe_device.results import deformed_png, write_point_vtu
@@ -142,13 +154,12 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
     t_tables = time.perf_counter() - t0
     t0 = time.perf_counter()
     n_vtu = 0
-    if vtu:
-        for p in fe.points:
-            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
-                               ((case.guideway.material.E_Pa, case.guideway.material.nu),
-                                (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
-                put.files.append(f"vtu/{p}.vtu")
-                n_vtu += 1
+    for p in vtu_points(vtu, fe.points):
+        if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
+                           ((case.guideway.material.E_Pa, case.guideway.material.nu),
+                            (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
+            put.files.append(f"vtu/{p}.vtu")
+            n_vtu += 1
     if pngs:
         p0 = fe.points[0]
         picks = [(lvl_, j, "+x") for lvl_ in fe.levels for j in JOINTS][:4]
@@ -165,14 +176,15 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
 
 def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=None,
                update_baseline: bool = False, command: str = "femcheck verify", levels=(), mesh: str = "default",
-               jobs: int = 1, progress=None, fe_kind: str = "solid", fe_baseline_path=None, vtu: bool = True,
+               jobs: int = 1, progress=None, fe_kind: str = "solid", fe_baseline_path=None, vtu: str = "first",
                pngs: bool = True, convergence_point: str | None = None, joint_fe: bool = False,
                joint_mesh: str = "coarse") -> VerifyRun:
     """Run the verification on ``case`` and write everything into ``out_dir`` (atomically, file by file).
 
     ``levels``: FE levels to run ('simplified', 'detailed'; empty = analytical only); ``mesh``: FE mesh
     level; ``jobs``: worker processes for the FE solves; ``progress(description)`` after each FE solve;
-    ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``convergence_point``: run the
+    ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``vtu``: deformed FE models as VTU
+    at the first point ('first'), at every point ('all') or nowhere ('none'); ``convergence_point``: run the
     mesh-convergence study (coarse/default/fine) at this point and write ``mesh_convergence.csv``;
     ``joint_fe``: run the contact FE of the ball alone under tilt (:func:`femcheck.verify.contact_joints.ball_tilt_study`)
     and give the device's contact joints its measured slip ratio (else the theoretical 1); measure the laws of

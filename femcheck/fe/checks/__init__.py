@@ -52,3 +52,12 @@ def registry() -> dict[str, object]:
     """{NAME: module} of every verification problem in this package, in name order."""
     from femcheck.registry import plugins
     return dict(sorted((mod.NAME, mod) for mod in plugins(__name__, ("NAME", "run"))))
+
+
+def summaries() -> dict[str, str]:
+    """{NAME: one line on what the problem checks}, from the first line of each module's docstring."""
+    out = {}
+    for name, mod in registry().items():
+        line = (mod.__doc__ or "").strip().splitlines()[0] if mod.__doc__ else ""
+        out[name] = line.split(":", 1)[1].strip() if line.startswith(f"``{name}``:") else line
+    return out
