@@ -78,3 +78,23 @@ def test_status_line_shows_the_share_of_the_work_and_the_eta():
         bar.advance(1, "first")
     # 1 of 4 work units in 10 s: 30 s left
     assert any("[s] 1/2 (25 %) elapsed 10 s, ETA 30 s - first" in ln for ln in out.getvalue().splitlines())
+
+
+def test_diagnose_phase_weights_keep_the_eta_within_3x_on_a_measured_run():
+    """The phases of a measured `diagnose` on the reference case (whole library, 80 s; the same run PHASE_S was
+    calibrated on, so the agreement partly holds by construction) against the weights diagnose() announces."""
+    from femcheck.diagnose.selection import diagnosis_phases
+    measured = [54.75, 0.02, 7.92, 10.14, 4.82, 2.22, 0.56]     # s per phase, in order
+    weights = [w for _n, w in diagnosis_phases(9, 5, 2, 3, 1, True, True)]
+    assert len(weights) == len(measured)
+    assert _worst_eta_ratio(measured, weights) <= ETA_FACTOR
+    assert _worst_eta_ratio(measured, None) > ETA_FACTOR       # counted as equal phases it would not be
+
+
+def test_a_stage_can_learn_its_weights_after_it_started():
+    clock = FakeClock()
+    with StageProgress("late", None, Console(file=io.StringIO()), tty=False, interval_s=1e9, clock=clock) as bar:
+        bar.plan([1.0, 9.0])
+        clock.t = 2.0
+        bar.advance(1)
+        assert bar.eta_s() == 18.0          # 1 unit in 2 s, 9 units left

@@ -107,6 +107,14 @@ class StageProgress:
         elif not self.quiet and self.clock() - self._last_line >= self.interval_s:
             self._line()
 
+    def plan(self, weights) -> None:
+        """Set the steps' expected relative costs once they are known (after the stage started)."""
+        with self._lock:
+            self.weights = [float(w) for w in weights]
+            self.total = len(self.weights)
+        if self._bar is not None:
+            self._bar.update(self._task, total=self._work(self.total), steps=self._steps())
+
     # -- work and ETA ----------------------------------------------------------------------------
     def _work(self, steps: int | None) -> float | None:
         """Work of the first ``steps`` steps (in steps when there are no weights)."""
