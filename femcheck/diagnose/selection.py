@@ -469,11 +469,12 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
 
 
 #: seconds per unit of each phase of :func:`diagnose` (the reference case, 9 points x 6 directions, the whole
-#: effect library; measured phase by phase on the shared 2-core machine, 80 s in all): screening one located
-#: effect's placements, one fit of the model as given per fold, one candidate fit of a selection round, one
-#: rival pair, weighing one located effect's placements, the baseline per fold
-PHASE_S = {"placements": 11.0, "model as given": 0.005, "round": 0.9, "rivals": 0.13, "placements weighed": 0.45,
-           "baseline": 0.19}
+#: effect library; measured phase by phase on the shared 2-core machine with the compiled kernels cached, 67 s
+#: in all): screening one located effect's placements, one fit of the model as given per fold, one candidate
+#: fit of a selection round, one rival pair, weighing one located effect's placements, the baseline per fold.
+#: The very first run also compiles the kernels (about 45 s more in the screening): its ETA starts high.
+PHASE_S = {"placements": 1.7, "model as given": 0.005, "round": 2.1, "rivals": 0.2, "placements weighed": 0.96,
+           "baseline": 0.5}
 
 
 def diagnosis_phases(n_pool: int, n_located: int, max_effects: int, n_folds: int, max_located: int,
