@@ -249,8 +249,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     put("contributions.csv", tables.to_csv(crow))
     png = contributions_plot(shares)
     put("contributions.png", png)
-    sections.append(Section("Contributions of the compliant elements, detailed model (%, CONVENTIONS.md §7, seed 000 "
-                            "Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
+    sections.append(Section("Contributions of the compliant elements, detailed model (share of the complementary "
+                            "energy, %, seed 000 Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
                             images=(("contributions.png", png, "contributions"),), informational=True))
     for d in av.directions:
         series = {f"{lvl} {j}": [av.deflection(p, d, lvl, j) * (case.loads.detailed_test_N / (case.loads.simplified_test_N if lvl == 'simplified' else case.loads.detailed_test_N))
