@@ -389,7 +389,7 @@ def test_check_joints_verdict_line_names_the_laws_off_by_more_than_10pct():
     assert jc.verdict_line(jc.joint_table_rows([ok])).startswith("verdict: every closed-form joint law within 10 %")
     line = jc.verdict_line(jc.joint_table_rows([ok, off]))
     # axial of the universal joint is 30 % off; its free spin (None) has no percentage and is not counted
-    assert "1 of 7" in line and "universal axial (+30.0 %)" in line, line
+    assert "verdict: 1 closed-form" in line and "7 joint-table laws" in line and "universal axial (+30.0 %)" in line, line
     # the ETA weights: build then solve per joint, the universal joint the heavier
     w = jc.progress_weights(("spherical", "universal"))
     assert len(w) == 4 and w[2] + w[3] > w[0] + w[1]

@@ -129,10 +129,11 @@ def verdict_line(rows: list[dict]) -> str:
     """One line that sums up the joint table: which laws are within 10 % of the contact FE, which are not."""
     flagged = [f"{r['joint']} {r['component']} ({r['error_pct']:+.1f} %)" for r in rows if r["off_by_more_than_10pct"]]
     n = sum(r["error_pct"] is not None for r in rows)
+    what = f"{n} joint-table laws compared ({', '.join(c for c, _k in TABLE_COMPONENTS)} per joint)"
     if not flagged:
-        return f"verdict: every closed-form joint law within {FLAG_PCT:g} % of the contact FE ({n} components compared)"
-    return (f"verdict: {len(flagged)} of {n} closed-form joint laws off by more than {FLAG_PCT:g} % from the contact "
-            f"FE: {', '.join(flagged)}")
+        return f"verdict: every closed-form joint law within {FLAG_PCT:g} % of the contact FE; {what}"
+    return (f"verdict: {len(flagged)} closed-form joint laws off by more than {FLAG_PCT:g} % from the contact FE: "
+            f"{', '.join(flagged)}; {what}")
 
 
 def _json_matrix(C: np.ndarray) -> list:
