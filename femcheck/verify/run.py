@@ -4,7 +4,7 @@ The run covers the analytical models (both levels, both joint idealizations, 9 p
 and, for the requested FE ``levels``, the device FE model (``femcheck.verify.fe``): relative-error
 tables analytical vs FE (``errors_simplified.csv`` / ``errors_detailed.csv``, column ``rel_error_pct``,
 seed 000 Tables 2-3 layout in report.md/report.html), deflection comparison plots (Figs. 9-11, 17-19),
-contributions (Fig. 23), VTU per point and a few PNGs of deformed models. ``--check`` fails on (a) analytical
+contributions (Fig. 23), VTU of the deformed models (first point, or every point) and a few PNGs of them. ``--check`` fails on (a) analytical
 drift, (b) FE drift against the FE baseline, (c) a mean analytical-FE error above its threshold.
 
 Three jobs, three modules: :mod:`~femcheck.verify.compute` builds the tables as data,
@@ -12,8 +12,9 @@ Three jobs, three modules: :mod:`~femcheck.verify.compute` builds the tables as 
 writes report.md and report.html from one list of ``Section`` objects, led by the verdict, plus
 ``verdict.json`` and ``junit.xml``. This module runs them in order and writes the files (CSV next to each table).
 
-Adding a report section: append ``Section(title, rows, formats, note=...)`` to ``sections`` (``first=True``
-places it right after the verdict); adding a check: append a ``Check`` to ``checks``.
+Adding a report section: append ``Section(title, rows, formats, note=..., part=...)`` to ``sections`` (``part``
+one of :data:`femcheck.verify.render.PARTS`: the report is ordered by part, whatever the order of appending;
+``informational=True`` labels a table no check reads); adding a check: append a ``Check`` to ``checks``.
 """
 from __future__ import annotations
 
