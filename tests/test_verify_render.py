@@ -102,3 +102,17 @@ def test_table_writer_takes_bare_and_braced_format_specs_and_never_prints_none_o
     assert body == [["0.0001235", "n/a", "n/a", "True"]]     # the spec applies; bools are not numbers here
     html = tables.to_html(rows, {"a": "{:.4g}"}, explain={"c": "no such law"})
     assert 'title="no such law">n/a' in html and "n/a in c: no such law" in html
+
+
+def test_vtu_of_the_first_point_by_default_every_point_on_request():
+    """--vtu first (default) writes one deformed-model VTU (about 40 MB at the default mesh), all one per point,
+    none nothing; anything else is refused."""
+    import pytest
+
+    from femcheck.verify.run import vtu_points
+    pts = ("P0", "P1", "P2")
+    assert vtu_points("first", pts) == ("P0",) and vtu_points(True, pts) == ("P0",)
+    assert vtu_points("all", pts) == pts
+    assert vtu_points("none", pts) == () and vtu_points(False, pts) == ()
+    with pytest.raises(ValueError, match="expected one of first, all, none"):
+        vtu_points("some", pts)
