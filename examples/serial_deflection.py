@@ -1,5 +1,5 @@
 """Deflection of a serial robot (ABB IRB 120, conventional VJM after seed 003) through the Python API:
-what ``femcheck deflect cases/irb120.toml --pose 0,30,-20,0,45,0 --wrench 0,0,-100,0,0,0`` prints.
+what ``femcheck deflect cases/irb120.toml --pose 0,30,-20,0,45,0 --deg --wrench 0,0,-100,0,0,0`` prints.
 
 Run: ``python examples/serial_deflection.py`` from the repository root.
 """

@@ -21,6 +21,15 @@ def case():
 
 
 @pytest.fixture(scope="session")
+def coarse_p0_fe_models(case):
+    """The detailed device FE at P0 on the coarse mesh ({point: PointModel}: meshes and condensed
+    super-elements), built once per session: the coverage and joint-law tests both solve on it (models are
+    immutable; a law mutation or a joint law changes only the dense leg algebra solved on top)."""
+    from femcheck.verify.fe import run_fe
+    return run_fe(case, ("P0",), levels=("detailed",), mesh="coarse").models
+
+
+@pytest.fixture(scope="session")
 def points(case):
     import femcheck
     return femcheck.test_points(case)

@@ -9,10 +9,9 @@ from femcheck.coverage import element_coverage
 
 
 @pytest.fixture(scope="module")
-def fe_models():
-    """The coarse FE super-elements at P0, built once (no law mutation or actuation option changes them)."""
-    from femcheck.verify.fe import run_fe
-    return run_fe(femcheck.load_case("cases/haptic_6psu.toml"), ("P0",), levels=("detailed",), mesh="coarse").models
+def fe_models(coarse_p0_fe_models):
+    """The coarse FE super-elements at P0, built once per session (no law mutation or actuation option changes them)."""
+    return coarse_p0_fe_models
 
 
 def _law_actuation():

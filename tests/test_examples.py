@@ -13,7 +13,8 @@ EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 
 
 def test_there_are_examples():
-    assert {p.stem for p in EXAMPLES} >= {"python_api", "serial_deflection", "diagnosis"}
+    assert {p.stem for p in EXAMPLES} >= {"python_api", "serial_deflection", "diagnosis", "urdf_workflow"}
+    assert (ROOT / "examples" / "urdf" / "arm3.urdf").is_file()   # the URDF the workflow example imports
 
 
 @pytest.mark.parametrize("script", EXAMPLES, ids=lambda p: p.stem)

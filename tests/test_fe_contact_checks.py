@@ -90,7 +90,7 @@ def test_check_solver_cli_json_contact_patch():
 
     out = CliRunner().invoke(get_app(), ["check-solver", "contact-patch", "--mesh", "coarse", "--json", "-"])
     assert out.exit_code == 0, out.output
-    rows = json.loads(out.output)
+    rows = json.loads(out.stdout)   # the progress lines go to standard error
     assert rows[0]["name"] == "contact-patch"
     assert set(rows[0]) >= {"name", "computed", "reference", "rel_error", "tolerance", "passed", "dofs", "iterations",
                             "seconds"}
@@ -170,3 +170,17 @@ def test_hertz_cylinder_default():
     assert r.rel_error < 0.01  # 10 µm elements at a ≈ 105 µm: half-width within 1 %
     lo, hi = r.detail["a_bracket_m"]
     assert lo <= r.reference <= hi
+
+
+def test_check_solver_help_lists_every_problem():
+    """`check-solver --help` names every registered problem with what it checks."""
+    from typer.testing import CliRunner
+
+    from femcheck.cli import get_app
+    from femcheck.fe.checks import registry, summaries
+
+    out = CliRunner().invoke(get_app(), ["check-solver", "--help"], env={"COLUMNS": "200"})
+    assert out.exit_code == 0, out.output
+    for name, text in summaries().items():
+        assert name in out.output and text.split()[0] in out.output, name
+    assert set(summaries()) == set(registry()) and len(registry()) >= 7

@@ -377,3 +377,19 @@ def test_universal_joint_mesh_convergence_within_3_percent(case):
                       for lv in ("coarse", "default", "fine")], float)
     spread = 100.0 * (comps.max(axis=0) - comps.min(axis=0)) / np.abs(comps[-1])
     assert np.all(spread <= 3.0), dict(zip(jf.COMPONENTS, spread.round(2)))
+
+
+def test_check_joints_verdict_line_names_the_laws_off_by_more_than_10pct():
+    """The last line of check-joints: every law within 10 %, or the ones that are not, with their error."""
+    an = np.diag([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    ok = {"joint": "spherical", "fe_component_compliance": [1.0, 1.0, 1.05, 1.0, 1.0, 1.0],
+          "analytical_compliance": jc._json_matrix(an)}
+    off = {"joint": "universal", "fe_component_compliance": [1.0, 1.0, 1.3, 1.0, 1.0, None],
+           "analytical_compliance": jc._json_matrix(an)}
+    assert jc.verdict_line(jc.joint_table_rows([ok])).startswith("verdict: every closed-form joint law within 10 %")
+    line = jc.verdict_line(jc.joint_table_rows([ok, off]))
+    # axial of the universal joint is 30 % off; its free spin (None) has no percentage and is not counted
+    assert "verdict: 1 closed-form" in line and "7 joint-table laws" in line and "universal axial (+30.0 %)" in line, line
+    # the ETA weights: build then solve per joint, the universal joint the heavier
+    w = jc.progress_weights(("spherical", "universal"))
+    assert len(w) == 4 and w[2] + w[3] > w[0] + w[1]

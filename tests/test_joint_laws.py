@@ -91,9 +91,8 @@ def test_cache_key_follows_the_universal_mesh_levels(monkeypatch):
 
 
 @pytest.fixture(scope="module")
-def p0_model():
-    from femcheck.verify.fe import run_fe
-    return run_fe(femcheck.load_case(CASE), ("P0",), levels=("detailed",), mesh="coarse").models["P0"]
+def p0_model(coarse_p0_fe_models):
+    return coarse_p0_fe_models["P0"]
 
 
 def _deflections(case, model, laws):

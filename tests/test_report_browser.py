@@ -1,5 +1,6 @@
-"""The verify report in a real headless browser (issue 17 item 5): every image loads, the verdict is visible
-without scrolling, no console error. Skipped with a reason when no Chromium is installed
+"""The verify report in a real headless browser: every image loads, the verdict is visible without
+scrolling, no console error, and no table cell holds a bare format code (``.4g``, ``{:+.1f}``), ``None`` or
+``nan``, nor an unexplained missing value (``n/a`` without a ``title``). Skipped with a reason when no Chromium is installed
 (Debian/Ubuntu: ``apt-get install chromium``; see README "Report in a browser").
 
 A small probe script is put into a copy of report.html (the report itself has no scripts): it records error
@@ -13,6 +14,7 @@ import os
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -36,7 +38,15 @@ window.addEventListener('load', function () {
   var heads = Array.prototype.slice.call(document.querySelectorAll('h2'));
   var v = heads.filter(function (h) { return h.textContent.trim() === 'Verdict'; })[0];
   var note = v ? v.nextElementSibling : null;
-  var out = {images: imgs.length,
+  var bare = /^([+-]?\\.\\d+[a-zA-Z%]|\\{[^}]*\\}|None|nan|NaN)$/;
+  var cells = Array.prototype.slice.call(document.querySelectorAll('td'));
+  var badCells = cells.filter(function (c) {
+    var t = c.textContent.trim();
+    return bare.test(t) || (t === 'n/a' && !c.title);
+  }).map(function (c) { return c.textContent.trim(); });
+  var out = {images: imgs.length, cells: cells.length, bad_cells: badCells,
+             anchors_ok: Array.prototype.slice.call(document.querySelectorAll('nav a')).every(function (a) {
+               return document.getElementById(a.getAttribute('href').slice(1)) !== null; }),
              broken: imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); }).map(function (i) { return i.alt; }),
              verdict_bottom: note ? note.getBoundingClientRect().bottom : null, verdict_text: note ? note.textContent : '',
              viewport: window.innerHeight, errors: window.__errors};
@@ -81,6 +91,8 @@ def test_verify_report_in_headless_browser(tmp_path, case):
     assert out["verdict_bottom"] is not None and out["verdict_bottom"] <= out["viewport"], out  # above the fold
     assert out["verdict_text"].startswith("PASS"), out
     assert out["errors"] == [], out
+    assert out["cells"] > 100 and out["bad_cells"] == [], out["bad_cells"]   # every number formatted
+    assert out["anchors_ok"], out                                          # every contents link lands
     assert run.checks and all(c.status in ("pass", "skipped") for c in run.checks)
 
 
@@ -95,3 +107,37 @@ def test_browser_probe_sees_a_broken_image_and_a_late_verdict(tmp_path):
     assert out["broken"] == ["broken"]
     assert out["verdict_bottom"] > out["viewport"]
     assert any("IMG" in e for e in out["errors"])
+
+
+def _joint_and_coverage_sections():
+    """The joint table from a stored contact-FE run (cases/laws, the unedited check-joints JSON) and a table
+    with an explained missing value, rendered as the verify report renders them."""
+    from femcheck.fe_device.joint_check import joint_table_rows, joint_table_section
+    root = Path(__file__).resolve().parents[1]
+    results = json.loads((root / "cases" / "laws" / "haptic_6psu_spherical_coarse.json").read_text())
+    joints = joint_table_section(joint_table_rows(results))
+    cov = Section("coverage", ({"element": "guideway", "min_detectable_pct": 2.5},
+                               {"element": "actuation", "min_detectable_pct": None}), part="coverage",
+                  explain={"min_detectable_pct": "no mutation is caught"})
+    return joints, cov
+
+
+def test_joint_table_shows_numbers_in_the_browser(tmp_path):
+    """The joint table as the verify report writes it: numbers in every cell, missing values explained."""
+    from femcheck.verify.render import verdict_section
+    joints, cov = _joint_and_coverage_sections()
+    out = _probe(render_html("probe", "intro", [joints, cov, verdict_section([], [], 1.0)]), tmp_path)
+    assert out["cells"] >= 4 * 6 + 4 and out["bad_cells"] == [], out    # 4 components x 6 columns + coverage
+    assert out["anchors_ok"] and out["errors"] == [], out
+
+
+def test_browser_probe_sees_bare_format_codes_none_and_unexplained_gaps(tmp_path):
+    """The cell check can fail: the joint table through a writer that does not apply its specs, a None and
+    an unexplained gap are all caught."""
+    import dataclasses
+    joints, cov = _joint_and_coverage_sections()
+    raw = dataclasses.replace(joints, rows=tuple({**r, "fe_compliance": ".4g", "error_pct": "+.1f"}
+                                                 for r in joints.rows))
+    gaps = Section("gaps", ({"a": "None", "b": None},))
+    out = _probe(render_html("probe", "intro", [raw, gaps, dataclasses.replace(cov, explain={})]), tmp_path)
+    assert sorted(set(out["bad_cells"])) == sorted({".4g", "+.1f", "None", "n/a"}), out

@@ -20,7 +20,7 @@ def test_verdict_section_leads_markdown_and_html_wherever_it_is_appended():
     assert md.index("## Verdict") < md.index("## Errors")
     assert "FAIL: 1 passed, 1 failed, 1 skipped; run time 3.2 s." in md
     html = render_html("t", "intro", sections)
-    assert html.index("<h2>Verdict</h2>") < html.index("<h2>Errors</h2>")
+    assert html.index('<h2 id="verdict">Verdict</h2>') < html.index(">Errors</h2>")
 
 
 def test_verdict_json_and_junit_have_one_entry_per_check():
@@ -72,3 +72,47 @@ def test_the_verdict_leads_even_when_other_sections_ask_to_be_first():
     assert [s.title for s in ordered(secs)] == ["Verdict", "coverage", "a", "b"]
     # a verdict not marked first still leads, once
     assert [s.title for s in ordered([Section("a"), Section("Verdict")])] == ["Verdict", "a"]
+
+
+def test_sections_follow_the_readers_order_with_contents_and_raw_deflections_folded_last():
+    """Verdict, contents, then coverage, errors, joints, contact diagnosis, convergence, supporting, raw;
+    whatever order the run appends them in."""
+    from femcheck.verify.render import Section, render_html, render_markdown, verdict_section
+    secs = [Section("raw", ({"point": "P0", "dx_mm": 0.1},), part="raw", collapsed=True, informational=True),
+            Section("plot"), Section("conv", part="convergence"), Section("diag", part="contact_diagnosis"),
+            Section("joints", part="joints"), Section("err", part="errors"), Section("cov", part="coverage"),
+            verdict_section([], [], 1.0)]
+    want = ["Verdict", "cov", "err", "joints", "diag", "conv", "plot", "raw"]
+    for text, head in ((render_html("t", "i", secs), lambda t: f">{t}</h2>"),
+                       (render_markdown("t", "i", secs), lambda t: f"## {t}\n")):
+        pos = [text.index(head(t)) for t in want]
+        assert pos == sorted(pos), (want, pos)
+        contents = text.index("Contents")
+        assert pos[0] < contents < pos[1]                       # the verdict first, the contents right after it
+        for anchor in ("#verdict", "#s1", "#s7"):
+            assert anchor in text[contents:pos[1]]              # every section is linked from the contents
+        raw = text[pos[-1]:]
+        assert "<details>" in raw and "Informational" in raw    # folded and labelled
+
+
+def test_table_writer_takes_bare_and_braced_format_specs_and_never_prints_none_or_nan():
+    from femcheck.report import tables
+    rows = [{"a": 0.000123456, "b": float("nan"), "c": None, "d": True}]
+    _cols, body = tables.cells(rows, {"a": ".4g", "b": "{:.2f}", "d": "{:.1f}"})
+    assert body == [["0.0001235", "n/a", "n/a", "True"]]     # the spec applies; bools are not numbers here
+    html = tables.to_html(rows, {"a": "{:.4g}"}, explain={"c": "no such law"})
+    assert 'title="no such law">n/a' in html and "n/a in c: no such law" in html
+
+
+def test_vtu_of_the_first_point_by_default_every_point_on_request():
+    """--vtu first (default) writes one deformed-model VTU (about 40 MB at the default mesh), all one per point,
+    none nothing; anything else is refused."""
+    import pytest
+
+    from femcheck.verify.run import vtu_points
+    pts = ("P0", "P1", "P2")
+    assert vtu_points("first", pts) == ("P0",) and vtu_points(True, pts) == ("P0",)
+    assert vtu_points("all", pts) == pts
+    assert vtu_points("none", pts) == () and vtu_points(False, pts) == ()
+    with pytest.raises(ValueError, match="expected one of first, all, none"):
+        vtu_points("some", pts)

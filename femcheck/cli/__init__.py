@@ -58,10 +58,15 @@ def _root(
     logging.getLogger("skfem").setLevel(logging.DEBUG if verbose >= 2 else logging.ERROR if quiet else logging.WARNING)
 
 
-def progress(stage: str, total, console=None):
-    """A :class:`femcheck.cli._progress.StageProgress` for a long stage (quiet under -q)."""
+def progress(stage: str, total, console=None, weights=None, stderr: bool = False):
+    """A :class:`femcheck.cli._progress.StageProgress` for a long stage (quiet under -q); ``weights``: the
+    expected relative cost of each step, for the ETA; ``stderr``: progress on standard error (when standard
+    output carries JSON)."""
     from femcheck.cli._progress import StageProgress
-    return StageProgress(stage, total, console or globals()["console"](), quiet=OUTPUT["quiet"])
+    if console is None:
+        from rich.console import Console
+        console = Console(stderr=True) if stderr else globals()["console"]()
+    return StageProgress(stage, total, console, quiet=OUTPUT["quiet"], weights=weights)
 
 
 _registered = False

@@ -36,13 +36,42 @@ def parse_vector(text: str, n: int, name: str) -> np.ndarray:
     return np.asarray(values)
 
 
-def select_pose(case, point: str | None, pose: str | None, points=None, labels=POINT_LABELS) -> tuple[np.ndarray, str]:
-    """The (1, 6) pose from --point P0..P8 or --pose x,y,z,rx,ry,rz (m, rad); default P0. ``points`` (k, 6) and
-    ``labels`` (k,): the case's test points when they are not the 6-PSU's (e.g. a parallel_device case)."""
+#: what every --pose takes: one convention for all commands
+POSE_UNITS = "lengths in m and angles in rad; --mm: lengths in mm, --deg: angles in degrees"
+#: the options that state other units for --pose (shared by every command that takes a pose)
+DEG_OPTION = typer.Option(False, "--deg", help="--pose angles in degrees (default: rad)")
+MM_OPTION = typer.Option(False, "--mm", help="--pose lengths in mm (default: m)")
+#: a --pose length beyond this (m) or an angle beyond a turn is refused as a likely unit mix-up
+POSE_MAX_LENGTH_M = 10.0
+
+
+def parse_pose(text: str, lengths: int, angles: int, *, deg: bool = False, mm: bool = False,
+               name: str = "--pose") -> np.ndarray:
+    """``--pose`` text -> SI values (m, rad), ``lengths`` lengths then ``angles`` angles, in the units
+    :data:`POSE_UNITS` states. A length above :data:`POSE_MAX_LENGTH_M` or an angle above one turn is refused
+    with the option that probably was meant (--mm, --deg): no robot here reaches 10 m, and a joint or
+    orientation angle beyond 2 pi rad is a number of degrees read as radians."""
+    v = parse_vector(text, lengths + angles, name)
+    L = v[:lengths] * (1e-3 if mm else 1.0)
+    A = v[lengths:] * (np.pi / 180.0 if deg else 1.0)
+    if lengths and np.max(np.abs(L)) > POSE_MAX_LENGTH_M:
+        raise typer.BadParameter(f"{name}: {text!r} has a length of {np.max(np.abs(L)):g} m; {name} lengths are in m "
+                                 "(give --mm for millimetres)")
+    if angles and np.max(np.abs(A)) > 2 * np.pi + 1e-12:
+        raise typer.BadParameter(f"{name}: {text!r} has an angle of {np.max(np.abs(A)):g} rad, more than a turn; "
+                                 f"{name} angles are in rad (give --deg for degrees)")
+    return np.concatenate([L, A])
+
+
+def select_pose(case, point: str | None, pose: str | None, points=None, labels=POINT_LABELS, *, deg: bool = False,
+                mm: bool = False) -> tuple[np.ndarray, str]:
+    """The (1, 6) pose (m, rad) from --point P0..P8 or --pose x,y,z,rx,ry,rz (:data:`POSE_UNITS`; rotation
+    vector); default P0. ``points`` (k, 6) and ``labels`` (k,): the case's test points when they are not the
+    6-PSU's (e.g. a parallel_device case)."""
     if point and pose:
         raise typer.BadParameter("give either --point or --pose, not both")
     if pose:
-        return parse_vector(pose, 6, "--pose")[None, :], f"[{pose}]"
+        return parse_pose(pose, 3, 3, deg=deg, mm=mm)[None, :], f"[{pose}]"
     label = (point or "P0").upper()
     if label not in labels:
         raise typer.BadParameter(f"--point: {point!r}; expected one of {', '.join(labels)}")

@@ -14,13 +14,14 @@ from femcheck.parallel.device import POINT_LABELS, test_points
 from femcheck.parallel.leg_kinematics import actuation_jacobian, solve_legs
 
 
-def select_pose(case, point: str | None, pose: str | None) -> tuple[np.ndarray, str]:
-    """The (1, 6) pose from --point or --pose over the device's own test points."""
-    return _select_pose(case, point, pose, points=test_points(case), labels=POINT_LABELS)
+def select_pose(case, point: str | None, pose: str | None, *, deg: bool = False, mm: bool = False) -> tuple[np.ndarray, str]:
+    """The (1, 6) pose from --point or --pose (m, rad unless ``mm`` / ``deg``) over the device's own test points."""
+    return _select_pose(case, point, pose, points=test_points(case), labels=POINT_LABELS, deg=deg, mm=mm)
 
 
-def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, wrench, json_out) -> None:
-    P, label = select_pose(case, point, pose)
+def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, wrench, json_out, deg: bool = False,
+              mm: bool = False) -> None:
+    P, label = select_pose(case, point, pose, deg=deg, mm=mm)
     dev = case.device
     state = solve_legs(dev, P)
     if not state.ok[0]:

@@ -1,12 +1,15 @@
 """``femcheck check-joints CASE [--joint spherical|universal|all] [--mesh coarse|default|fine] [--point P0]
-[--json OUT] [--csv OUT]``: contact FE of the passive joints vs their closed-form laws (issue 14).
+[--json OUT] [--csv OUT]``: contact FE of the passive joints vs their closed-form laws.
 
 Each joint is meshed and solved with penalty contact, augmented Lagrangian and modified Newton–Raphson,
 condensed onto its contact DOFs (:mod:`femcheck.fe_device.joint_fe`), under the eq. 1 force levels of
 the most loaded joint at the test point (:mod:`femcheck.fe_device.joint_check`). JSON (``-`` = stdout):
 a list with one object per joint, keys ``converged``, ``dofs``, ``iterations``, ``seconds``,
 ``fe_compliance``, ``analytical_compliance`` (6 x 6, SI) and ``error_pct`` (per component), and more.
-``--csv`` writes the joint table. Exit 0 when every joint converged; a joint that does not converge
+``--csv`` writes the joint table. The terminal table gives each compliance with its unit (m/N, rad/(N m)), and
+a last line gives the verdict: which closed-form laws are within 10 % of the contact FE. Progress (with an ETA
+weighted by the joints' expected costs) goes to the terminal, or to plain lines off a terminal.
+Exit 0 when every joint converged; a joint that does not converge
 raises ConvergenceError (residual history, chattering points) and exits 1.
 """
 from __future__ import annotations
@@ -54,9 +57,12 @@ def register(app: typer.Typer) -> None:
                                     "without it")
         names = JOINTS if joint == "all" else (joint,)
         results = []
+        from femcheck.cli import console, progress
+        from femcheck.fe_device.joint_check import progress_weights
         try:
-            for name in names:
-                results.append(check_joint(case, name, mesh, point))
+            with progress("joint contact FE", None, weights=progress_weights(names), stderr=json_out == "-") as bar:
+                for name in names:
+                    results.append(check_joint(case, name, mesh, point, progress=lambda d: bar.advance(1, d)))
         except ConvergenceError as exc:
             typer.secho(f"check failed: {exc}", err=True, fg="red")
             raise typer.Exit(1)
@@ -74,13 +80,19 @@ def register(app: typer.Typer) -> None:
             return
         from rich.table import Table
 
-        from femcheck.cli import console
-        t = Table(title=f"femcheck check-joints {case_path} (mesh {mesh}, point {point.upper()})")
-        for col in ("joint", "component", "FE", "analytical", "error %", "DOFs", "iterations", "wall s"):
-            t.add_column(col, justify="left" if col in ("joint", "component") else "right")
+        from femcheck.fe_device.joint_check import verdict_line
+        t = Table(title=f"femcheck check-joints {case_path} (mesh {mesh}, point {point.upper()}): compliance of each "
+                        "component with the other five held")
+        for col in ("joint", "component", "unit", "FE", "analytical", "error %", "DOFs", "iterations", "wall s"):
+            t.add_column(col, justify="left" if col in ("joint", "component", "unit") else "right")
         for r in results:
             for k, comp in enumerate(COMPONENTS):
                 fe, an, e = r["fe_component_compliance"][k], r["analytical_compliance"][k][k], r["error_pct"][comp]
-                t.add_row(r["joint"], comp, "inf" if fe is None else f"{fe:.4g}", f"{an:.4g}",
+                t.add_row(r["joint"], comp, "m/N" if comp.startswith("u_") else "rad/(N m)",
+                          "inf (free)" if fe is None else f"{fe:.4g}", f"{an:.4g}",
                           "-" if e is None else f"{e:+.1f}", str(r["dofs"]), str(r["iterations"]), f"{r['seconds']:.1f}")
-        console().print(t)
+        con = console()
+        con.print(t)
+        con.print("error % = 100 (FE - analytical) / analytical; '-': no percentage where the FE leaves the component "
+                  "free (a mechanism)")
+        con.print(verdict_line(joint_table_rows(results)))

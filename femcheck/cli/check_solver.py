@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import List, Optional
 
 import typer
+from typer.core import TyperCommand
 
 from femcheck.cli._common import JSON_HELP, emit_json
 
@@ -18,8 +19,24 @@ from femcheck.errors import FemcheckError
 MESHES = ("coarse", "default", "fine")
 
 
-def run_checks(names: list[str] | None = None, mesh: str = "default"):
-    """Run the named checks (all when empty) and return their CheckResults, in registry order."""
+def problems_help() -> str:
+    """The list of problems for ``check-solver --help`` (read from the registry when help is asked for)."""
+    from femcheck.fe.checks import summaries
+    return "Problems (NAME: what it checks):\n\n" + "\n\n".join(f"{n}: {t}" for n, t in summaries().items())
+
+
+class _ProblemsInHelp(TyperCommand):
+    """``--help`` ends with the registered problems; they are looked up only then (importing the problem
+    modules costs seconds, which no other command should pay)."""
+
+    def format_help(self, ctx, formatter) -> None:
+        self.epilog = problems_help()
+        super().format_help(ctx, formatter)
+
+
+def run_checks(names: list[str] | None = None, mesh: str = "default", progress=None):
+    """Run the named checks (all when empty) and return their CheckResults, in registry order;
+    ``progress(name)`` after each."""
     from femcheck.fe.checks import registry
 
     if mesh not in MESHES:
@@ -29,18 +46,29 @@ def run_checks(names: list[str] | None = None, mesh: str = "default"):
     if unknown:
         raise FemcheckError(f"unknown check {', '.join(repr(n) for n in unknown)}; available: {', '.join(reg)}")
     from femcheck.fe.checks import run_check
-    return [run_check(reg[n], mesh) for n in (names or list(reg))]
+    out = []
+    for n in names or list(reg):
+        out.append(run_check(reg[n], mesh))
+        if progress:
+            progress(n)
+    return out
 
 
 def register(app: typer.Typer) -> None:
-    @app.command("check-solver")
+    @app.command("check-solver", cls=_ProblemsInHelp)
     def check_solver(
         names: Optional[List[str]] = typer.Argument(None, help="problems to run (default: all)"),
         mesh: str = typer.Option("default", "--mesh", help="refinement: coarse | default | fine"),
         json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
     ) -> None:
-        """Verify the FE solver against closed forms (Timoshenko, Johnson, seed 004)."""
-        results = run_checks(list(names or []), mesh)
+        """Verify the FE solver against closed forms (Timoshenko, Johnson, seed 004): each problem's computed
+        value, its closed form, the relative error against the problem's tolerance, DOFs and wall time."""
+        from femcheck.cli import progress
+        from femcheck.fe.checks import expected_seconds, registry
+        chosen = list(names or []) or list(registry())
+        with progress("check-solver", None, weights=[expected_seconds(n, mesh) for n in chosen],
+                      stderr=json_out == "-") as bar:
+            results = run_checks(list(names or []), mesh, progress=lambda n: bar.advance(1, n))
         if json_out:
             keys = ("name", "computed", "reference", "rel_error", "tolerance", "tolerance_reason", "passed", "dofs",
                     "iterations", "seconds")

@@ -48,7 +48,10 @@ def register(app: typer.Typer) -> None:
         if set_:
             case = case.with_params(**parse_overrides(set_))
         con = console()
-        with progress("coverage", 1 + 5 + (2 if joint_fe else 0), con) as bar:
+        from femcheck.coverage.element_coverage import progress_weights
+        from femcheck.fe_device.joint_laws import cached
+        weights = progress_weights(len(pts), mesh, cached(case, joint_mesh) if joint_fe else None)
+        with progress("coverage", None, weights=weights, stderr=json_out == "-") as bar:
             laws = None
             if joint_fe:
                 from femcheck.fe_device.joint_laws import measure_joint_laws

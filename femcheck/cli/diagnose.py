@@ -1,5 +1,5 @@
 """``femcheck diagnose CASE MEASURED.csv``: where the model is wrong, the physical cause, the extended model
-and its held-out gain (issue 7; docs/diagnose.md)."""
+and its held-out gain (docs/diagnose.md)."""
 from __future__ import annotations
 
 import json
@@ -72,8 +72,10 @@ def register(app: typer.Typer) -> None:
         readings = process(data, case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
         mismatch = device_mismatch_warnings(case, data.meta, readings, m)
-        d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence,
-                     likelihood=likelihood)
+        from femcheck.cli import progress
+        with progress("diagnose", None, stderr=json_out == "-") as bar:
+            d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence, likelihood=likelihood,
+                         progress=bar)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
         result["warnings"] = list(result.get("warnings", [])) + mismatch
         if json_out == "-":

@@ -65,9 +65,13 @@ def register(app: typer.Typer) -> None:
             table = read_pose_table(pose_table, case)
         readings = process(read_measured_csv(measured), case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
-        d = diagnose(m, readings, candidates=pool, with_baseline=False)
-        p = plan_measurements(m, readings, d.weighing, budget=budget, n_poses=poses, rivals=rivals, seed=seed,
-                              max_condition=limit, tilt_rad=tilt)
+        from femcheck.cli import progress
+        with progress("diagnose", None, stderr=json_out == "-") as bar:
+            d = diagnose(m, readings, candidates=pool, with_baseline=False, progress=bar)
+        # the plan itself: no count of steps to give an ETA for; the heartbeat shows that it runs
+        with progress("plan", None, stderr=json_out == "-"):
+            p = plan_measurements(m, readings, d.weighing, budget=budget, n_poses=poses, rivals=rivals, seed=seed,
+                                  max_condition=limit, tilt_rad=tilt)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), "model": d.model_name,
                   "verdict": d.verdict, "ambiguous": d.weighing.ambiguous, "ambiguity": d.weighing.ambiguity,
                   **p.as_json()}

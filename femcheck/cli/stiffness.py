@@ -10,8 +10,8 @@ from rich.table import Table
 
 from femcheck.chain import ELEMENT_NAMES, ELEMENTS, evaluate
 from femcheck.cli import console
-from femcheck.cli._common import (JSON_HELP, Joints, ModelLevel, emit_json, load_case_for, parse_vector, print_contributions,
-                                  print_directional_stiffness, select_pose)
+from femcheck.cli._common import (DEG_OPTION, JSON_HELP, MM_OPTION, POSE_UNITS, Joints, ModelLevel, emit_json, load_case_for,
+                                  parse_vector, print_contributions, print_directional_stiffness, select_pose)
 from femcheck.kinematics.conditioning import DEFAULT_MAX_CONDITION, require_well_conditioned
 from femcheck.kinematics.psu6 import condition_number, leg_geometry
 
@@ -23,7 +23,9 @@ def register(app: typer.Typer) -> None:
         model: ModelLevel = typer.Option(ModelLevel.detailed, "--model", help="simplified (links) or detailed (links + joints + actuation)"),
         joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's [model] joint_rotations"),
         point: str = typer.Option(None, "--point", help="test point P0..P8 (default P0)"),
-        pose: str = typer.Option(None, "--pose", help="TCP pose x,y,z,rx,ry,rz (m, rad; rotation vector)"),
+        pose: str = typer.Option(None, "--pose", help="TCP pose x,y,z,rx,ry,rz (rotation vector; " + POSE_UNITS + ")"),
+        deg: bool = DEG_OPTION,
+        mm: bool = MM_OPTION,
         wrench: str = typer.Option(None, "--wrench", help="TCP wrench fx,fy,fz,mx,my,mz (N, N m); default: the case's detailed test load along +z"),
         max_condition: float = typer.Option(DEFAULT_MAX_CONDITION, "--max-condition", help="refuse poses whose cond(J_h) exceeds this (singularity guard; warns above a tenth of it)"),
         json_out: Optional[str] = typer.Option(None, "--json", metavar="OUT", help=JSON_HELP),
@@ -37,8 +39,8 @@ def register(app: typer.Typer) -> None:
         if case.kind == "parallel_device":
             from femcheck.cli import _parallel_device
             return _parallel_device.stiffness(case, case_path, model=model.value, joints=joints.value if joints else None,
-                                              point=point, pose=pose, wrench=wrench, json_out=json_out)
-        P, label = select_pose(case, point, pose)
+                                              point=point, pose=pose, wrench=wrench, json_out=json_out, deg=deg, mm=mm)
+        P, label = select_pose(case, point, pose, deg=deg, mm=mm)
         if not (np.isfinite(max_condition) and max_condition > 1):
             raise typer.BadParameter(f"--max-condition: {max_condition}; expected a finite number > 1")
         cond = require_well_conditioned(case, leg_geometry(case, P, labels=[label]), [label], max_condition)

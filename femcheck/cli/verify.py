@@ -30,7 +30,9 @@ def register(app: typer.Typer) -> None:
         baseline: Path = typer.Option(Path("reports/baseline/analytical.json"), "--baseline", help="analytical baseline for --check"),
         fe_baseline: Path = typer.Option(None, "--fe-baseline", help="FE baseline (default reports/baseline/fe_<mesh>.json)"),
         update_baseline: bool = typer.Option(False, "--update-baseline", help="write the current values as the baseline(s)"),
-        vtu: bool = typer.Option(True, "--vtu/--no-vtu", help="write a VTU of the deformed FE models per point"),
+        vtu: str = typer.Option("first", "--vtu", help="VTU of the deformed FE models (zlib-compressed): first = at "
+                                "the first point (about 40 MB at the default mesh), all = at every point, none"),
+        no_vtu: bool = typer.Option(False, "--no-vtu", help="same as --vtu none"),
         convergence: str = typer.Option(None, "--convergence", help="mesh-convergence study (coarse/default/fine) at this point, "
                                         "e.g. P0; default: P0 for a full default-mesh run, else none ('none' to skip)"),
         force: bool = typer.Option(False, "--force", help="empty --out even if it holds files femcheck did not write"),
@@ -49,11 +51,15 @@ def register(app: typer.Typer) -> None:
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
         rel_error_pct (%); the detailed file compares the contact-joint FE with both idealizations, and
         errors_detailed_matched.csv the FE with the same idealization), Markdown/HTML tables in the layout of seed 000 Tables 2-3, deflection and contribution
-        plots, VTU per point, report.html and manifest.json into --out.
+        plots, VTU of the first point (--vtu all: every point), report.html and manifest.json into --out.
         """
         from femcheck.cli import console
         from femcheck.fe_device.mesh_levels import MESH_LEVELS
         from femcheck.verify.run import error_rows, error_table, fe_error_rows, has_contact_joints, run_verify
+        from femcheck.verify.run import VTU_CHOICES
+        if vtu not in VTU_CHOICES:
+            raise typer.BadParameter(f"--vtu: {vtu!r}; expected one of {', '.join(VTU_CHOICES)}")
+        vtu = "none" if no_vtu else vtu
         if level not in LEVEL_CHOICES:
             raise typer.BadParameter(f"--level: {level!r}; expected one of {', '.join(LEVEL_CHOICES)}")
         if mesh not in MESH_LEVELS:

@@ -468,10 +468,35 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     return new, out
 
 
+#: seconds per unit of each phase of :func:`diagnose` (the reference case, 9 points x 6 directions, the whole
+#: effect library; measured phase by phase on the shared 2-core machine with the compiled kernels cached, 67 s
+#: in all): screening one located effect's placements, one fit of the model as given per fold, one candidate
+#: fit of a selection round, one rival pair, weighing one located effect's placements, the baseline per fold.
+#: The very first run also compiles the kernels (about 45 s more in the screening): its ETA starts high.
+PHASE_S = {"placements": 1.7, "model as given": 0.005, "round": 2.1, "rivals": 0.2, "placements weighed": 0.96,
+           "baseline": 0.5}
+
+
+def diagnosis_phases(n_pool: int, n_located: int, max_effects: int, n_folds: int, max_located: int,
+                     pairs: bool, baseline: bool) -> list[tuple[str, float]]:
+    """The phases of :func:`diagnose` and their expected costs (s, :data:`PHASE_S` times the phase's count of
+    units), for the progress ETA. Phases that do not run weigh (almost) nothing but are still reported."""
+    pool = n_pool + min(max_located, n_located)
+    located = n_located if max_located > 0 else 0
+    n_pairs = max(pool * (pool - 1) / 2, 0) if (pairs and max_effects >= 2) else 0
+    eps = 1e-3
+    return ([("placements", PHASE_S["placements"] * located + eps), ("model as given", PHASE_S["model as given"] * (1 + n_folds))]
+            + [(f"round {k + 1}", PHASE_S["round"] * pool + eps) for k in range(max_effects)]
+            + [("rivals", PHASE_S["rivals"] * n_pairs + eps),
+               ("placements weighed", PHASE_S["placements weighed"] * located + eps),
+               ("baseline", PHASE_S["baseline"] * n_folds if baseline else eps)])
+
+
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
              max_located: int = 1, evidence_method: str | None = None, likelihood: str | None = None,
-             partner_leads: int = 1, located_siblings: bool = False, unweighed_mass: bool = True) -> Diagnosis:
+             partner_leads: int = 1, located_siblings: bool = False, unweighed_mass: bool = True,
+             progress=None) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
@@ -479,7 +504,9 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     after the ``partner_leads`` best non-located singles, join as singles and in pairs with those leads
     (:func:`located_partners`). ``evidence_method``: "laplace" | "bic" (default
     :data:`femcheck.diagnose.evidence.EVIDENCE`); ``likelihood``: "gauss" | "student" (default
-    :data:`femcheck.diagnose.evidence.LIKELIHOOD`; "student" integrates sigma out when ``readings.sigma_dof`` > 0)."""
+    :data:`femcheck.diagnose.evidence.LIKELIHOOD`; "student" integrates sigma out when ``readings.sigma_dof`` > 0).
+    ``progress``: an object with ``plan(weights)`` (the expected relative cost of each phase, called once) and
+    ``advance(1, description)`` (after each phase), e.g. :class:`femcheck.cli._progress.StageProgress`."""
     if evidence_method is not None and evidence_method not in evidence.EVIDENCE_METHODS:
         raise ValueError(f"evidence_method: {evidence_method!r}; expected one of {', '.join(evidence.EVIDENCE_METHODS)}")
     if likelihood is not None and likelihood not in evidence.LIKELIHOODS:
@@ -492,6 +519,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     chosen_ids = [c for c in (candidates or sorted(reg)) if c != "none" and reg[c].applicable(model)]
     pool = [reg[c] for c in chosen_ids if not reg[c].located]
     located = [reg[c] for c in chosen_ids if reg[c].located]
+    phases = diagnosis_phases(len(pool), len(located), max_effects, n_folds, max_located, rivals_pairs, with_baseline)
+    if progress is not None:
+        progress.plan([w for _name, w in phases])
+    step = (lambda desc: progress.advance(1, desc)) if progress is not None else (lambda desc: None)
     # the nonlinear leg choice refines the three linearly best element types (at least max_located): the linear
     # ranking at scale 1 can put the wrong type first when a leg is far from 1 (e.g. a near-rigid guideway); the
     # max_located best *refined* placements join the candidates
@@ -499,9 +530,11 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                 if located and max_located > 0 else [])
     placements = screened[:max_located]
     pool += [p.effect for p in placements]
+    step("placements screened")
     folds = point_folds(readings, n_folds)
     base = fit_effects(model, readings, [])
     cv_base = cross_validate(model, readings, [], base, folds)
+    step("model as given fitted")
     n_total = 3 * readings.n_states
     threshold = 2.0 * np.sqrt(2.0 * n_total)
     chosen, cur_fit, cur_cv = [], base, cv_base
@@ -548,6 +581,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         log.info("round %d: best %s (dBIC %.1f), held-out chi2 %.1f -> %s, accepted %s", rnd + 1,
                  fits[0].ids if fits else "-", cur_fit.bic - fits[0].bic if fits else 0.0, cur_cv.chi2,
                  f"{best_cv.chi2:.1f}" if best_cv else "-", accepted)
+        step(f"selection round {rnd + 1}")
         if not accepted:
             break
         chosen, cur_fit, cur_cv = list(best.effects), best, best_cv
@@ -556,7 +590,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                  "+".join(e.id for e in chosen))
         chosen, cur_fit, cur_cv = [], base, cv_base
     # issue 15: weigh every rival (none, singles, pairs up to max_effects) by BIC evidence; the leader is the answer
+    for rnd_left in range(rnd + 1, max_effects):
+        step(f"selection round {rnd_left + 1} (not needed)")
     rivals = fit_rivals(model, readings, pool, base, pairs=max_effects >= 2 and rivals_pairs, known=known)
+    step("rival explanations fitted")
     partners = []
     if located and max_located > 0 and partner_leads >= 0:
         partners, extra = located_partners(model, readings, located, screened[max_located:], rivals,
@@ -566,6 +603,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     if located and max_located > 0 and unweighed_mass:
         leads = _partner_leads(rivals, partner_leads, bic_margin) if max_effects >= 2 and rivals_pairs else []
         rivals += unweighed_explanations(model, readings, located, rivals, leads)
+    step("placements weighed")
     greedy_ids = tuple(e.id for e in chosen)
     greedy_key = frozenset(chosen)
     for ex in rivals:   # the greedy fit (joint, several starts) is at least as good as the warm-started rival
@@ -630,6 +668,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
             base_err = residuals.mean_by_axis(readings, residuals.case_errors(readings, b.heldout_delta)["vector"])
         except Exception as exc:  # the baseline is informative only; never fail a diagnosis on it
             log.warning("seed 001 baseline failed: %s", exc)
+    step("baseline fitted")
     return Diagnosis(model_name=model.name, causes=causes, significant=bool(chosen), base=base, fit=cur_fit,
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,

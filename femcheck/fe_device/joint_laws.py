@@ -242,6 +242,12 @@ def measure_joint_law(case, joint: str, mesh: str = "coarse", ladder=None, use_c
     return law
 
 
+def cached(case, mesh: str = "coarse", points=None) -> dict[str, bool]:
+    """{joint: whether its law over the ladder of ``points`` is in the cache} (a read then takes milliseconds)."""
+    ladder = np.asarray(force_ladder(case, points), float)
+    return {j: _cache_path(_cache_key(case, j, mesh, ladder)).is_file() for j in JOINTS}
+
+
 def measure_joint_laws(case, mesh: str = "coarse", points=None, use_cache: bool = True, progress=None) -> JointLaws:
     """Both joints' laws (:func:`measure_joint_law`) over the ladder of ``points`` (default all nine)."""
     ladder = force_ladder(case, points)

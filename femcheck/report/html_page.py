@@ -7,7 +7,8 @@ import html
 _CSS = """body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;color:#222}
 table{border-collapse:collapse;margin:1em 0;font-size:0.9em}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}
 th{background:#eee}h1{font-size:1.5em}h2{font-size:1.2em;margin-top:1.6em}img{max-width:100%}.note{color:#555}
-code{background:#f4f4f4;padding:1px 4px}"""
+code{background:#f4f4f4;padding:1px 4px}nav ul{margin:0.2em 0}nav{font-size:0.9em}
+td.missing{color:#777}summary{cursor:pointer;color:#345}"""
 
 
 class HtmlPage:
@@ -17,8 +18,9 @@ class HtmlPage:
         self.title = title
         self.parts: list[str] = []
 
-    def heading(self, text: str, level: int = 2) -> "HtmlPage":
-        self.parts.append(f"<h{level}>{html.escape(text)}</h{level}>")
+    def heading(self, text: str, level: int = 2, anchor: str = "") -> "HtmlPage":
+        ident = f' id="{html.escape(anchor)}"' if anchor else ""
+        self.parts.append(f"<h{level}{ident}>{html.escape(text)}</h{level}>")
         return self
 
     def paragraph(self, text: str, cls: str = "") -> "HtmlPage":

@@ -4,7 +4,7 @@ The run covers the analytical models (both levels, both joint idealizations, 9 p
 and, for the requested FE ``levels``, the device FE model (``femcheck.verify.fe``): relative-error
 tables analytical vs FE (``errors_simplified.csv`` / ``errors_detailed.csv``, column ``rel_error_pct``,
 seed 000 Tables 2-3 layout in report.md/report.html), deflection comparison plots (Figs. 9-11, 17-19),
-contributions (Fig. 23), VTU per point and a few PNGs of deformed models. ``--check`` fails on (a) analytical
+contributions (Fig. 23), VTU of the deformed models (first point, or every point) and a few PNGs of them. ``--check`` fails on (a) analytical
 drift, (b) FE drift against the FE baseline, (c) a mean analytical-FE error above its threshold.
 
 Three jobs, three modules: :mod:`~femcheck.verify.compute` builds the tables as data,
@@ -12,8 +12,9 @@ Three jobs, three modules: :mod:`~femcheck.verify.compute` builds the tables as 
 writes report.md and report.html from one list of ``Section`` objects, led by the verdict, plus
 ``verdict.json`` and ``junit.xml``. This module runs them in order and writes the files (CSV next to each table).
 
-Adding a report section: append ``Section(title, rows, formats, note=...)`` to ``sections`` (``first=True``
-places it right after the verdict); adding a check: append a ``Check`` to ``checks``.
+Adding a report section: append ``Section(title, rows, formats, note=..., part=...)`` to ``sections`` (``part``
+one of :data:`femcheck.verify.render.PARTS`: the report is ordered by part, whatever the order of appending;
+``informational=True`` labels a table no check reads); adding a check: append a ``Check`` to ``checks``.
 """
 from __future__ import annotations
 
@@ -72,13 +73,25 @@ def _fmt(rows, spec, skip=("point",)) -> dict:
     return {k: spec for k in rows[0] if k not in skip}
 
 
+#: which points get a VTU of their deformed FE models: the first (default), every point, or none
+VTU_CHOICES = ("first", "all", "none")
+
+
+def vtu_points(vtu, points) -> tuple:
+    """The points whose VTU is written for ``vtu`` (one of :data:`VTU_CHOICES`; True/False: 'first'/'none')."""
+    which = {True: "first", False: "none"}.get(vtu, vtu)
+    if which not in VTU_CHOICES:
+        raise ValueError(f"vtu = {vtu!r}; expected one of {', '.join(VTU_CHOICES)}")
+    return {"first": tuple(points[:1]), "all": tuple(points), "none": ()}[which]
+
+
 def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: bool, tilt=None) -> tuple[dict, dict]:
     """Tables, plots and files of the FE comparison; appends its sections; returns the error tables and timings."""
     from femcheck.fe_device.results import deformed_png, write_point_vtu
     tabs = {}
     t0 = time.perf_counter()
     sections.append(Section(f"Analytical vs FE (mesh {fe.mesh.level}: guideway {fe.mesh.guideway_m * 1e3:g} mm, "
-                            f"link {fe.mesh.link_m * 1e3:g} mm, {fe.kind} parts)"))
+                            f"link {fe.mesh.link_m * 1e3:g} mm, {fe.kind} parts)", part="errors"))
     for level in fe.levels:
         load = case.loads.simplified_test_N if level == "simplified" else case.loads.detailed_test_N
         variants = [None]
@@ -96,7 +109,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
                 tabs[(level, j, fe_joints or j)] = tab
                 what = f"{j} joints" if fe_joints is None else f"{j} analytical joints vs contact-joint FE"
                 sections.append(Section(f"{level.capitalize()} analytical vs {level} FE, {what} (relative error at "
-                                        f"{load:g} N, %)", tuple(tab), _fmt(tab, "{:.2f}"), note=note))
+                                        f"{load:g} N, %)", tuple(tab), _fmt(tab, "{:.2f}"), note=note, part="errors"))
                 note = ""
         if level == "detailed" and has_contact_joints(fe):
             from femcheck.verify.contact_joints import moment_demand
@@ -104,7 +117,8 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
             put("contact_joints.md", text + "\n" + (tables.to_markdown(trows) if trows else ""))
             if trows:
                 put("contact_joint_tilt.csv", tables.to_csv(trows))
-            sections.append(Section("Which idealization the contact FE follows", tuple(trows), note=text))
+            sections.append(Section("Which idealization the contact FE follows", tuple(trows), note=text, part="errors",
+                                    informational=True))
         for d in fe.directions:
             series = {f"{src} {j}": [(av.deflection(p, d, level, j) if src == "analytical" else fe.deflection(p, d, level, j))
                                      for p in fe.points] for j in JOINTS for src in ("analytical", "FE")}
@@ -122,7 +136,7 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
                      fe.deflection(p, d, "detailed", "released") for d in fe.directions}} for p in fe.points]
         put("fe_detailed_released_over_rigid.csv", tables.to_csv(ratio))
         sections.append(Section("Detailed FE: released / rigid and contact / released deflection ratios", tuple(ratio),
-                                _fmt(ratio, "{:.2f}")))
+                                _fmt(ratio, "{:.2f}"), informational=True))
     from femcheck.chain import ELEMENT_NAMES, ELEMENTS
     lvl = "detailed" if "detailed" in fe.levels else "simplified"
     shares = {}
@@ -137,17 +151,16 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
     put("fe_contributions.csv", tables.to_csv(crow))
     sections.append(Section(f"Contributions, {lvl} level: analytical vs FE (share of strain energy, seed 000 Fig. 23)",
                             tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
-                            images=(("fe_contributions.png", png, "FE contributions"),)))
+                            images=(("fe_contributions.png", png, "FE contributions"),), informational=True))
     t_tables = time.perf_counter() - t0
     t0 = time.perf_counter()
     n_vtu = 0
-    if vtu:
-        for p in fe.points:
-            if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
-                               ((case.guideway.material.E_Pa, case.guideway.material.nu),
-                                (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
-                put.files.append(f"vtu/{p}.vtu")
-                n_vtu += 1
+    for p in vtu_points(vtu, fe.points):
+        if write_point_vtu(out / "vtu" / f"{p}.vtu", fe.models[p], fe.results[p],
+                           ((case.guideway.material.E_Pa, case.guideway.material.nu),
+                            (case.proximal_link.material.E_Pa, case.proximal_link.material.nu))):
+            put.files.append(f"vtu/{p}.vtu")
+            n_vtu += 1
     if pngs:
         p0 = fe.points[0]
         picks = [(lvl_, j, "+x") for lvl_ in fe.levels for j in JOINTS][:4]
@@ -164,14 +177,15 @@ def _fe_sections(case, av, fe, pts, put, sections: list, out, vtu: bool, pngs: b
 
 def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=None,
                update_baseline: bool = False, command: str = "femcheck verify", levels=(), mesh: str = "default",
-               jobs: int = 1, progress=None, fe_kind: str = "solid", fe_baseline_path=None, vtu: bool = True,
+               jobs: int = 1, progress=None, fe_kind: str = "solid", fe_baseline_path=None, vtu: str = "first",
                pngs: bool = True, convergence_point: str | None = None, joint_fe: bool = False,
                joint_mesh: str = "coarse") -> VerifyRun:
     """Run the verification on ``case`` and write everything into ``out_dir`` (atomically, file by file).
 
     ``levels``: FE levels to run ('simplified', 'detailed'; empty = analytical only); ``mesh``: FE mesh
     level; ``jobs``: worker processes for the FE solves; ``progress(description)`` after each FE solve;
-    ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``convergence_point``: run the
+    ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``vtu``: deformed FE models as VTU
+    at the first point ('first'), at every point ('all') or nowhere ('none'); ``convergence_point``: run the
     mesh-convergence study (coarse/default/fine) at this point and write ``mesh_convergence.csv``;
     ``joint_fe``: run the contact FE of the ball alone under tilt (:func:`femcheck.verify.contact_joints.ball_tilt_study`)
     and give the device's contact joints its measured slip ratio (else the theoretical 1); measure the laws of
@@ -229,15 +243,16 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         er = error_rows(av, joints)
         put(f"simplified_vs_detailed_{joints}.csv", tables.to_csv(er))
         sections.append(Section(f"Simplified vs detailed analytical model, {joints} joints (relative error at "
-                                f"{case.loads.detailed_test_N:g} N, %)", tuple(er), _fmt(er, "{:.1f}")))
+                                f"{case.loads.detailed_test_N:g} N, %)", tuple(er), _fmt(er, "{:.1f}"),
+                                informational=True))
     shares = {j: av.mean_contributions(j) for j in JOINTS}
     crow = [{"element": e, **{f"{j} %": 100 * shares[j][e] for j in JOINTS}} for e in shares[JOINTS[0]]]
     put("contributions.csv", tables.to_csv(crow))
     png = contributions_plot(shares)
     put("contributions.png", png)
-    sections.append(Section("Contributions of the compliant elements, detailed model (%, CONVENTIONS.md §7, seed 000 "
-                            "Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
-                            images=(("contributions.png", png, "contributions"),)))
+    sections.append(Section("Contributions of the compliant elements, detailed model (share of the complementary "
+                            "energy, %, seed 000 Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
+                            images=(("contributions.png", png, "contributions"),), informational=True))
     for d in av.directions:
         series = {f"{lvl} {j}": [av.deflection(p, d, lvl, j) * (case.loads.detailed_test_N / (case.loads.simplified_test_N if lvl == 'simplified' else case.loads.detailed_test_N))
                                  for p in av.points] for lvl in LEVELS for j in JOINTS}
@@ -248,8 +263,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     cond_rows = conditioning_rows(av)
     put("conditioning.csv", tables.to_csv(cond_rows))
     sections.append(Section("Conditioning (Jacobian homogenized with R_p; K_T in twists [d; R_p theta], detailed, "
-                            "worst direction)", tuple(cond_rows), _fmt(cond_rows, "{:.3f}")))
-    sections.append(Section("Deflections (mm)", tuple(rows), DEFLECTION_FMT))
+                            "worst direction)", tuple(cond_rows), _fmt(cond_rows, "{:.3f}"), informational=True))
+    sections.append(Section("Raw deflections, analytical models (mm)", tuple(rows), DEFLECTION_FMT, part="raw",
+                            informational=True, collapsed=True))
 
     fe_tabs, fe_times = ({}, {})
     contact_diag = None
@@ -274,8 +290,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                                                         indent=2, default=float) + "\n")
             drows = contact_diag.summary_rows()
             sections.append(Section(
-                "Contact FE as a virtual experiment, diagnosed (femcheck diagnose, issue 7)", tuple(drows),
-                {"held-out error before %": "{:.2f}", "held-out error after %": "{:.2f}"},
+                "Contact FE as a virtual experiment, diagnosed (femcheck diagnose)", tuple(drows),
+                {"held-out error before %": "{:.2f}", "held-out error after %": "{:.2f}"}, part="contact_diagnosis",
+                informational=True,
                 note="Readings of the paper's protocol (9 points, +-x +-y +-z, preload 5 N, 3 trials, noise, 0.01 mm "
                      "dials) from the detailed FE with contact joints, diagnosed against the detailed analytical model: "
                      "which cause femcheck names and the held-out error before and after (files contact_fe_*.csv/json)."))
@@ -289,10 +306,18 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         put("coverage.json", json.dumps(coverage.as_json(), indent=2, default=float) + "\n")
         cov_rows = coverage.rows()
         put("coverage.csv", tables.to_csv(cov_rows))
+        caught = [r["element"] for r in cov_rows if r["detected"]]
+        missed = [r["element"] for r in cov_rows if not r["detected"]]
         sections.append(Section(
-            f"Verification coverage: {coverage.covered_share_pct:.1f} % of the detailed compliance is checked by the FE",
-            tuple(cov_rows), first=True,
-            note=f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
+            "Verification coverage: which element laws the FE checks",
+            tuple(cov_rows), part="coverage",
+            explain={"min_detectable_pct": "no mutation of this law is caught (the error does not move, or the FE "
+                                           "reuses the law)"},
+            note=f"The mutation of {coverage.mutation_pct:+g} % is caught for: {', '.join(caught) or 'none'}; not "
+                 f"caught for: {', '.join(missed) or 'none'} (column detected). The elements with a finite "
+                 f"min_detectable_pct carry {coverage.covered_share_pct:.1f} % of the detailed compliance: a larger "
+                 "error of their laws would be caught. "
+                 f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
                  f"analytical ({coverage.analytical_joints}) and FE ({coverage.fe_joints} joints) rerun at "
                  f"{', '.join(coverage.points)}. fe_source from behaviour: 'meshed' when the FE does not move with the "
                  "law (an independent model; 'contact_fe' where that model is the joint's contact FE), "
@@ -311,7 +336,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         fmt = {k: "{:.4f}" if k.endswith("_mm") else "{:.2f}" for k in conv_rows[0] if k.endswith(("_mm", "_%"))}
         sections.append(Section(f"Mesh convergence at {convergence_point} (deflection mm; change vs the fine mesh %, "
                                 f"acceptance: default within {100 * CONVERGENCE_TOL:.0f} %)", tuple(conv_rows), fmt,
-                                extra_rows=tuple(conv_mesh)))
+                                extra_rows=tuple(conv_mesh), part="convergence"))
         worst = max(r["default_vs_fine_%"] for r in conv_rows)
         conv_info = {"point": convergence_point, "meshes": conv_mesh, "default_vs_fine_max_pct": round(worst, 4),
                      "seconds": round(time.perf_counter() - tc, 2)}
@@ -335,7 +360,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         checks.append(conv_check)
     failures = [c.detail for c in checks if c.status == "fail" and not c.name.endswith(" drift")]
     if check and drift:
-        sections.append(Section("Regression check: drifted values", pre="\n".join(drift)))
+        sections.append(Section("Regression check: drifted values", pre="\n".join(drift), part="errors"))
     worst_err = worst_errors(fe_tabs)
     seconds = time.perf_counter() - t0
     sections.append(verdict_section(checks, worst_err, seconds))

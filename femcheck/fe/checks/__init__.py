@@ -52,3 +52,23 @@ def registry() -> dict[str, object]:
     """{NAME: module} of every verification problem in this package, in name order."""
     from femcheck.registry import plugins
     return dict(sorted((mod.NAME, mod) for mod in plugins(__name__, ("NAME", "run"))))
+
+
+def summaries() -> dict[str, str]:
+    """{NAME: one line on what the problem checks}, from the first line of each module's docstring."""
+    out = {}
+    for name, mod in registry().items():
+        line = (mod.__doc__ or "").strip().splitlines()[0] if mod.__doc__ else ""
+        out[name] = line.split(":", 1)[1].strip() if line.startswith(f"``{name}``:") else line
+    return out
+
+
+#: wall time of each problem at the default mesh (s; ``femcheck check-solver --json``, the shared 2-core machine
+#: under load), the expected cost behind the progress ETA; other meshes scale all problems alike
+EXPECTED_S = {"bar-modal": 0.44, "cantilever-beam": 5.2, "cantilever-solid": 4.9, "contact-patch": 6.2,
+              "friction-block": 38.3, "hertz-cylinder": 23.2, "hertz-sphere": 284.6}
+
+
+def expected_seconds(name: str, mesh: str = "default") -> float:
+    """Expected relative cost of problem ``name`` (:data:`EXPECTED_S`; 10 s for a problem without a record)."""
+    return EXPECTED_S.get(name, 10.0)

@@ -1,4 +1,4 @@
-"""Contact patch test: two elastic blocks pressed flat transmit a uniform pressure (issue 5 acceptance).
+"""``contact-patch``: two elastic blocks pressed flat transmit a uniform pressure (contact patch test).
 
 Two identical-material blocks (side L = 10 mm, steel E = 210 GPa, ν = 0.3) touch on the plane z = 0;
 the top face of the upper block carries a uniform pressure P = 100 MPa, the bottom face of the lower block

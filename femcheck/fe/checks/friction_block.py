@@ -1,4 +1,4 @@
-"""Friction block: Coulomb stick below μN, slide at μN (issue 5 acceptance; seed 004 §3.2.2–3.2.3).
+"""``friction-block``: Coulomb stick below μN, slide at μN (seed 004 §3.2.2–3.2.3).
 
 A steel block (W × W × H, W = 10 mm, H = 2.5 mm) rests on an equal block clamped at its bottom; the
 contact is Coulomb with μ = 0.3 (AL penalty, Gauss-point-to-surface, conforming interface).

@@ -1,4 +1,4 @@
-"""Hertz cylinder on a flat (line contact, plane strain): contact half-width vs Johnson eq. 4.43.
+"""``hertz-cylinder``: a cylinder on a flat (line contact, plane strain), contact half-width vs Johnson eq. 4.43.
 
 Identical steel (E = 210 GPa, ν = 0.3), cylinder radius R = 5 mm, load per unit length P' = 200 N/mm
 (a ≈ 0.105 mm). A slab one element thick (y) with u_y = 0 everywhere is plane strain; half model with

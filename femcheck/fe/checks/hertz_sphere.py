@@ -1,4 +1,4 @@
-"""Hertz sphere on a flat block: approach and contact radius vs Johnson's closed form (issue 5 acceptance).
+"""``hertz-sphere``: a sphere on a flat block, approach and contact radius vs Johnson's closed form.
 
 Identical steel (E = 210 GPa, ν = 0.3), sphere radius R = 5 mm on a flat, F = 15 N and 50 N (two load
 steps of one solve; Hertz a = 78.7 µm and 117.6 µm, δ = 1.239 µm and 2.764 µm). Quarter model (symmetry
