@@ -90,3 +90,59 @@ def test_serial_refusals(serial, capsys):
     assert "input file" in capsys.readouterr().err.replace("\n", " ") + ""
     assert (tmp / "robot.toml").read_text() == before
     assert main(["diagnose", str(tmp / "robot.toml"), str(tmp / "data.csv"), "--compensation", str(tmp / "c.csv")]) == 2
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 6-PSU: a located cause (<element>_in_legs)
+# ---------------------------------------------------------------------------------------------------------------
+def test_6psu_located_cause_round_trip(tmp_path):
+    """Spherical joint 2-2.6x softer in two random legs: the corrected case ([model.leg_scale]) reproduces the fit's
+    "after" readings and a diagnosis of it against the same data names nothing further."""
+    import femcheck
+    from femcheck.case.registry import load_case
+    from femcheck.diagnose import AnalyticalChainModel, diagnose, predict_readings
+    from femcheck.diagnose.extended_case import extended_case_text
+    from femcheck.experiment.simulate import simulate
+    from femcheck.measured import process
+    case_path = "cases/haptic_6psu.toml"
+    case = femcheck.load_case(case_path)
+    rng = np.random.default_rng(37)
+    legs = sorted(rng.choice(6, size=2, replace=False).tolist())
+    truth = {f"leg{i}": float(rng.uniform(2.0, 2.6)) for i in legs}
+    r = process(simulate(case, [("spherical_joint_in_legs", truth)], seed=int(rng.integers(1000)),
+                         directions=("+x", "+y", "+z")).data, case)
+    d = diagnose(AnalyticalChainModel(case, "detailed", "rigid"), r, with_baseline=False)
+    assert [c.id for c in d.causes] == ["spherical_joint_in_legs"] and list(d.causes[0].legs) == legs
+    out = tmp_path / "ext.toml"
+    out.write_text(extended_case_text(case, open(case_path).read(), d, "detailed"))
+    assert "[model.leg_scale]" in out.read_text() and "from spherical_joint_in_legs" in out.read_text()
+    ext = load_case(out)
+    m2 = AnalyticalChainModel(ext, "detailed", "rigid")
+    diff = float(np.abs(predict_readings(m2, r) - d.fit.predicted).max())
+    print(f"6-PSU round trip: largest prediction difference {diff:.3g} m (sigma {r.reading_sigma_m:.3g} m)")
+    assert diff < 1e-6 * r.reading_sigma_m     # module docstring: rounding only
+    d2 = diagnose(m2, r, with_baseline=False)
+    assert d2.verdict == "none", (d2.verdict, [c.id for c in d2.causes])
+    # the stiffness of the corrected device: the leg's spherical joint is softer, the others as modelled
+    from femcheck.chain import evaluate
+    S = evaluate(ext, r.pose[:1], np.zeros(6)).S[0]
+    S0 = evaluate(case, r.pose[:1], np.zeros(6)).S[0]
+    assert np.trace(S[:3, :3]) > np.trace(S0[:3, :3])
+
+
+def test_6psu_unwritable_cause_is_refused_by_name():
+    """hertz_stiffening has no key in the case kind: refused by name (exit 2 through FemcheckError), not dropped."""
+    import femcheck
+    from femcheck.diagnose.effects import get_effect
+    from femcheck.diagnose.extended_case import extended_case_text
+    from femcheck.errors import FemcheckError
+    case = femcheck.load_case("cases/haptic_6psu.toml")
+
+    class Fit:
+        effects = (get_effect("hertz_stiffening"),)
+        values, ci_low, ci_high = ((3.0,),), ((2.0,),), ((4.0,),)
+
+    class D:
+        fit, causes = Fit(), ()
+    with pytest.raises(FemcheckError, match="hertz_stiffening"):
+        extended_case_text(case, open("cases/haptic_6psu.toml").read(), D(), "detailed")
