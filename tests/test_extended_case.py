@@ -146,3 +146,35 @@ def test_6psu_unwritable_cause_is_refused_by_name():
         fit, causes = Fit(), ()
     with pytest.raises(FemcheckError, match="hertz_stiffening"):
         extended_case_text(case, open("cases/haptic_6psu.toml").read(), D(), "detailed")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# cobot identification (seed 002 extended VJM)
+# ---------------------------------------------------------------------------------------------------------------
+def test_cobot_identification_round_trip(tmp_path, capsys):
+    """identify --extended-case: the written springs predict, at every measured pose and wrench, the fit's own
+    deflections A c; its verification error is the one identify reported."""
+    from femcheck.case.registry import load_case
+    from femcheck.cli.identify import read_data
+    from femcheck.vjm.extended_vjm import identification_matrix, virtual_jacobian
+    from femcheck.vjm.serial_vjm import deflect
+    data, out, js = tmp_path / "d.csv", tmp_path / "cobot_ext.toml", tmp_path / "i.json"
+    assert main(["identify", "cases/cobot7.toml", str(data), "--make-data", "--noise", "0.001", "--seed", "3"]) == 0
+    assert main(["identify", "cases/cobot7.toml", str(data), "--extended-case", str(out), "--json", str(js)]) == 0
+    j = json.loads(js.read_text())
+    ext = load_case(out)
+    sets, q, W, dX = read_data(str(data), ext.n_joints)
+    vjm = ext.vjm()
+    J = virtual_jacobian(vjm.chain, q, True, vjm.tilt_offset_m)
+    after = (identification_matrix(J, W) @ np.array(j["compliances"])).reshape(-1, 3)
+    pred = deflect(vjm, q, W, complementary=False).twist[:, :3]
+    diff = float(np.abs(pred - after).max())
+    print(f"cobot round trip: largest prediction difference {diff:.3g} m (deflections up to {np.abs(dX).max():.3g} m)")
+    # the fit's tolerance: least squares to machine precision on cond(A) ~ 2e2; 1e-9 of the largest deflection
+    assert diff < 1e-9 * np.abs(dX).max()
+    ver = sets == "verification"
+    e = 100 * np.linalg.norm(pred[ver] - dX[ver], axis=1) / np.linalg.norm(dX[ver], axis=1)
+    assert e.mean() == pytest.approx(j["error_verification_pct"]["mean"], rel=1e-6)
+    assert "from identify extended VJM" in out.read_text()
+    # OUT == CASE is refused before any work
+    assert main(["identify", "cases/cobot7.toml", str(data), "--extended-case", "cases/cobot7.toml"]) == 2

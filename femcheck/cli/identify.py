@@ -108,6 +108,8 @@ def register(app: typer.Typer) -> None:
         gravity: bool = typer.Option(False, "--gravity", help="--world: the measurements include the self-weight deflection"),
         random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
+        extended_case: str = typer.Option(None, "--extended-case", metavar="OUT.toml",
+                                          help="serial robot: write a copy of CASE with the identified joint stiffnesses"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
         on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
@@ -146,6 +148,10 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {make_data(case, data_path, noise, seed=seed, world=w, noise_mm=nmm)} rows to {data_path}"
                        + (" (beam world)" if w is not None else ""))
             return
+        if extended_case:
+            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
+            refuse_input_overwrite(extended_case, [case_path, data_path])
+            check_output_file(extended_case, "--extended-case")
         vjm = case.vjm()
         ext = model is VJMModel.extended
         sets, q, W, dX = read_data(data_path, case.n_joints)
@@ -172,6 +178,11 @@ def register(app: typer.Typer) -> None:
                "torsion_share": float(share[ident].mean()),
                "error_identification_pct": _errors(A[ident].reshape(-1, k), res.compliance, dX[ident]),
                "error_verification_pct": _errors(A[~ident].reshape(-1, k), res.compliance, dX[~ident])}
+        if extended_case:
+            from pathlib import Path
+            from femcheck.vjm.identified_case import identified_case_text
+            write_text_atomic(extended_case, identified_case_text(case, Path(case_path).read_text(), res.compliance,
+                                                                  res.standard_error, ext, data_path))
         if json_out:
             emit_json(out, json_out, inputs=[case_path, data_path])
         if json_out != "-":
