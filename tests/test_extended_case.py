@@ -128,6 +128,9 @@ def test_6psu_located_cause_round_trip(tmp_path):
     S = evaluate(ext, r.pose[:1], np.zeros(6)).S[0]
     S0 = evaluate(case, r.pose[:1], np.zeros(6)).S[0]
     assert np.trace(S[:3, :3]) > np.trace(S0[:3, :3])
+    # the worked example's last step: a stiffness map of the corrected device
+    assert main(["map", str(out), "--direction", "z", "--resolution", "9", "--out", str(tmp_path / "map.png")]) == 0
+    assert (tmp_path / "map.png").stat().st_size > 1000
 
 
 def test_6psu_unwritable_cause_is_refused_by_name():
