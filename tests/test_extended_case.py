@@ -181,3 +181,38 @@ def test_cobot_identification_round_trip(tmp_path, capsys):
     assert "from identify extended VJM" in out.read_text()
     # OUT == CASE is refused before any work
     assert main(["identify", "cases/cobot7.toml", str(data), "--extended-case", "cases/cobot7.toml"]) == 2
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# parallel device (general kind): an element kind softer in one leg
+# ---------------------------------------------------------------------------------------------------------------
+def test_parallel_device_round_trip(tmp_path):
+    """Hexapod, one drive 2.5x softer: the corrected case's [model.element_scale] predicts the fit's "after"
+    deflections, and diagnosing it against the same data moves no factor beyond the threshold."""
+    from femcheck.case.registry import load_case
+    from femcheck.measured.csv_format import read_measured_csv, write_measured_csv
+    from femcheck.parallel.diagnosis import diagnose, predict, readings_from, simulate
+    path = "cases/hexapod_6ups.toml"
+    case = load_case(path)
+    dev = case.device
+    s = np.ones((dev.n_legs, len(dev.element_names)))
+    s[3, dev.element_names.index("drive")] = 2.5
+    csv, out, js = tmp_path / "m.csv", tmp_path / "ext.toml", tmp_path / "d.json"
+    write_measured_csv(csv, *simulate(case, s, noise_m=2e-7), resolution_m=1e-7)
+    assert main(["diagnose", path, str(csv), "--extended-case", str(out), "--json", str(js)]) == 0
+    assert "[model.element_scale]" in out.read_text() and "drive by leg" in out.read_text()
+    ext = load_case(out)
+    data = read_measured_csv(csv)
+    best = json.loads(js.read_text())["best"]
+    assert best["what"] == "drive by leg"
+    fitted = np.ones_like(s)          # the kept candidate's factors, as the JSON reports them
+    fitted[:, dev.element_names.index("drive")] = [best["factors"][lg.name] for lg in dev.legs]
+    rd = readings_from(case, data)
+    joints = case.model.joint_rotations
+    after = predict(case, rd, fitted, model="detailed", joints=joints)
+    got = predict(ext, rd, np.ones_like(d.scale), model="detailed", joints=joints)
+    diff = float(np.abs(got - after).max())
+    print(f"parallel device round trip: largest prediction difference {diff:.3g} m")
+    assert diff < 1e-6 * 2e-7      # the same factors multiply the same compliances: rounding only (noise 2e-7 m)
+    d2 = diagnose(ext, data)
+    assert d2.effects == (), d2.effects

@@ -21,9 +21,9 @@ def check_extended_outputs(case, case_path, measured, extended_case, compensatio
     if compensation and not serial:
         raise FemcheckError(f"--compensation: a {case.meta.kind} case; the table is written for serial trees (markers "
                             "at joint angles)")
-    if extended_case and case.meta.kind not in ("haptic_6psu", "serial_tree"):
-        raise FemcheckError(f"--extended-case: a {case.meta.kind} case; the corrected case is written for haptic_6psu "
-                            "and serial_tree cases")
+    if extended_case and case.meta.kind not in ("haptic_6psu", "serial_tree", "parallel_device"):
+        raise FemcheckError(f"--extended-case: a {case.meta.kind} case; the corrected case is written for haptic_6psu, "
+                            "parallel_device and serial_tree cases")
     if extended_case and Path(extended_case).suffix.lower() != ".toml":
         raise FemcheckError(f"--extended-case: {extended_case}; expected a .toml file name")
 

@@ -71,7 +71,8 @@ def register(app: typer.Typer) -> None:
         if case.meta.kind == "parallel_device":
             from femcheck.cli._parallel_device import diagnose as diagnose_parallel
             return diagnose_parallel(case, case_path, measured, model=model.value,
-                                     joints=joints.value if joints else None, json_out=json_out)
+                                     joints=joints.value if joints else None, json_out=json_out,
+                                     extended_case=extended_case)
         for out in ((json_out,) if json_out != "-" else ()) + \
                 ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:

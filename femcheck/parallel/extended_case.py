@@ -1,0 +1,32 @@
+"""The corrected parallel-device case: the kept candidate of :func:`femcheck.parallel.diagnosis.diagnose` written
+into a copy of the case as ``[model.element_scale]`` (per element kind, one compliance factor per leg).
+
+The device built from the copy multiplies every element scale by these factors
+(:func:`femcheck.parallel.chain_model.evaluate`), so ``stiffness``, ``map`` and ``diagnose`` of the copy predict what
+the fit predicted ("after"). Factors the case already held are multiplied by the fitted ones (the fit was relative to
+them). Each written kind carries a comment: the legs the fit changed, their 95 % intervals, and the candidate.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from femcheck.case.toml_edit import Edit, edited
+
+
+def extended_case_text(case, case_text: str, diagnosis) -> str:
+    """``case_text`` with the kept candidate's factors (module docstring)."""
+    dev = case.device
+    names, legs = dev.element_names, [lg.name for lg in dev.legs]
+    held = dev.element_scale if dev.element_scale is not None else np.ones((dev.n_legs, len(names)))
+    new, (lo, hi) = diagnosis.scale, diagnosis.scale_ci
+    edits = []
+    for e, kind in enumerate(names):
+        changed = [i for i in range(dev.n_legs) if new[i, e] != 1.0]
+        if not changed:
+            continue
+        total = held[:, e] * new[:, e]
+        parts = "; ".join(f"{legs[i]}: {total[i]:.4g} in [{held[i, e] * lo[i, e]:.4g}, {held[i, e] * hi[i, e]:.4g}]"
+                          for i in changed)
+        edits.append(Edit("model.element_scale", kind, [float(v) for v in total],
+                          f"{parts} (95 %) from '{diagnosis.best.what}'"))
+    return edited(case_text, edits, "--extended-case")
