@@ -132,6 +132,22 @@ def append_table(text: str, table: str, items: dict, comment_lines=()) -> str:
     return text.rstrip("\n") + "\n" + "\n".join(out) + "\n"
 
 
+def factor_table_edits(table: str, kinds, legs, held, new, low, high, source: str) -> list[Edit]:
+    """One :class:`Edit` per element kind whose fitted factors ``new`` (L, K) move any leg: the written row is
+    ``held * new`` (the case's own factors times the fitted ones), commented with each moved leg's value, its 95 %
+    interval (``held * low`` .. ``held * high``) and ``source`` (the cause that set it). ``legs``: (L,) names."""
+    edits = []
+    for c, kind in enumerate(kinds):
+        changed = [i for i in range(len(legs)) if new[i, c] != 1.0]
+        if not changed:
+            continue
+        total = held[:, c] * new[:, c]
+        parts = "; ".join(f"{legs[i]}: {total[i]:.4g} in [{held[i, c] * low[i, c]:.4g}, {held[i, c] * high[i, c]:.4g}]"
+                          for i in changed)
+        edits.append(Edit(table, kind, [float(v) for v in total], f"{parts} (95 %) from {source}"))
+    return edits
+
+
 def _lookup(doc: dict, e: Edit):
     node = doc
     for part in e.table.split("."):

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from femcheck.case.toml_edit import Edit, edited
+from femcheck.case.toml_edit import Edit, edited, factor_table_edits
 from femcheck.chain import ELEMENTS
 from femcheck.errors import FemcheckError
 
@@ -118,17 +118,8 @@ def _leg_scale_edits(case, scale_ev, prob) -> list[Edit]:
                 lo_s, hi_s = np.minimum(lo_s, s), np.maximum(hi_s, s)
     ids = ", ".join(dict.fromkeys(e.id for e, _, _, _ in scale_ev))
     p = max((prob.get(e.id, 0.0) for e, _, _, _ in scale_ev), default=None)
-    edits = []
-    for c, name in enumerate(ELEMENTS):
-        changed = [i for i in range(6) if new[i, c] != 1.0]
-        if not changed:
-            continue
-        total = old[:, c] * new[:, c]
-        parts = "; ".join(f"leg {i}: {total[i]:.4g} in [{old[i, c] * lo_s[i, c]:.4g}, {old[i, c] * hi_s[i, c]:.4g}]"
-                          for i in changed)
-        edits.append(Edit("model.leg_scale", name, [float(x) for x in total],
-                          f"{parts} (95 %) from {ids}" + ("" if p is None else f", p = {p:.2f}")))
-    return edits
+    return factor_table_edits("model.leg_scale", ELEMENTS, [f"leg {i}" for i in range(6)], old, new, lo_s, hi_s,
+                              ids + ("" if p is None else f", p = {p:.2f}"))
 
 
 def _reading_edits(case, e, v, lo, hi, p) -> list[Edit]:

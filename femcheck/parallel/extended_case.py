@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from femcheck.case.toml_edit import Edit, edited
+from femcheck.case.toml_edit import edited, factor_table_edits
 
 
 def extended_case_text(case, case_text: str, diagnosis) -> str:
@@ -19,14 +19,5 @@ def extended_case_text(case, case_text: str, diagnosis) -> str:
     names, legs = dev.element_names, [lg.name for lg in dev.legs]
     held = dev.element_scale if dev.element_scale is not None else np.ones((dev.n_legs, len(names)))
     new, (lo, hi) = diagnosis.scale, diagnosis.scale_ci
-    edits = []
-    for e, kind in enumerate(names):
-        changed = [i for i in range(dev.n_legs) if new[i, e] != 1.0]
-        if not changed:
-            continue
-        total = held[:, e] * new[:, e]
-        parts = "; ".join(f"{legs[i]}: {total[i]:.4g} in [{held[i, e] * lo[i, e]:.4g}, {held[i, e] * hi[i, e]:.4g}]"
-                          for i in changed)
-        edits.append(Edit("model.element_scale", kind, [float(v) for v in total],
-                          f"{parts} (95 %) from '{diagnosis.best.what}'"))
+    edits = factor_table_edits("model.element_scale", names, legs, held, new, lo, hi, f"'{diagnosis.best.what}'")
     return edited(case_text, edits, "--extended-case")

@@ -31,6 +31,9 @@ from femcheck.errors import FemcheckError, MeasuredDataError
 from femcheck.robot.elastic import ElasticParams, equilibrium
 from femcheck.robot.tree import Geometry, forward, homogeneous, rotation
 
+#: the cause behind each flat elastic kind (messages)
+_CAUSE = {"torsion": "joint_torsion_compliance", "bending": "link_bending_compliance"}
+
 
 def rpy_of(R: np.ndarray) -> np.ndarray:
     """Roll, pitch, yaw (rad) of R = Rz(yaw) Ry(pitch) Rx(roll), the inverse of
@@ -131,15 +134,18 @@ def _spring_edits(case, diagnosis, params: ElasticParams) -> list[Edit]:
         cid, s, p = source[(kind, u)]
         return cid, s, f"{cid}, p = {p:.2f}"
 
+    def inverse_edit(kind, unit, row, c, key, si_unit, word):
+        """key = 1/c, refused where the fit leaves the element rigid (a rigid spring is an absent key)."""
+        _, s, text = why(kind, unit)
+        if c <= 0:
+            raise FemcheckError(f"--extended-case: {_CAUSE[kind]} leaves {word} {J[row].name} rigid; the case holds a "
+                                f"rigid element as an absent key, remove {key} by hand")
+        return Edit("joints", key, 1.0 / c, _inverse_ci(c, s, si_unit, text), index=row)
+
     for k, r in enumerate(tree.independent):
         r = int(r)
         if ("torsion", k) in source:
-            c = float(params.torsion[k])
-            _, s, text = why("torsion", k)
-            if c <= 0:
-                raise FemcheckError(f"--extended-case: joint_torsion_compliance leaves joint {J[r].name} rigid; the case "
-                                    "holds a rigid torsion as an absent key, remove stiffness_Nm_per_rad by hand")
-            edits.append(Edit("joints", "stiffness_Nm_per_rad", 1.0 / c, _inverse_ci(c, s, "N m/rad", text), index=r))
+            edits.append(inverse_edit("torsion", k, r, float(params.torsion[k]), "stiffness_Nm_per_rad", "N m/rad", "joint"))
         if ("backlash", k) in source:
             b = float(params.backlash[k])
             _, s, text = why("backlash", k)
@@ -157,12 +163,7 @@ def _spring_edits(case, diagnosis, params: ElasticParams) -> list[Edit]:
                               f"x: {_inverse_ci(float(c[0]), s, 'N m/rad', text)}; y: {_inverse_ci(float(c[1]), s, 'N m/rad', text)}",
                               index=r))
         if ("bending", r) in source:
-            c = float(params.bending[r])
-            _, s, text = why("bending", r)
-            if c <= 0:
-                raise FemcheckError(f"--extended-case: link_bending_compliance leaves the link of row {J[r].name} rigid; "
-                                    "remove bending_EI_Nm2 by hand")
-            edits.append(Edit("joints", "bending_EI_Nm2", 1.0 / c, _inverse_ci(c, s, "N m^2", text), index=r))
+            edits.append(inverse_edit("bending", r, r, float(params.bending[r]), "bending_EI_Nm2", "N m^2", "the link of row"))
     if ("mass_scale", 0) in source:
         sc = float(params.mass_scale)
         _, s, text = why("mass_scale", 0)
