@@ -216,3 +216,27 @@ def test_parallel_device_round_trip(tmp_path):
     assert diff < 1e-6 * 2e-7      # the same factors multiply the same compliances: rounding only (noise 2e-7 m)
     d2 = diagnose(ext, data)
     assert d2.effects == (), d2.effects
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# HISS weights (seed 001)
+# ---------------------------------------------------------------------------------------------------------------
+def test_hiss_weights_round_trip(tmp_path):
+    """identify --extended-case on a parallel_vjm case: [fitting] weights make the links' stiffness W K W, so the
+    written case predicts the weight fit's twists with all weights 1."""
+    from femcheck.case.registry import load_case
+    from femcheck.vjm import hiss_pipeline as hp
+    data_path, out, js = tmp_path / "h.csv", tmp_path / "hiss_ext.toml", tmp_path / "h.json"
+    assert main(["identify", "cases/hiss.toml", str(data_path), "--make-data", "--seed", "1"]) == 0
+    assert main(["identify", "cases/hiss.toml", str(data_path), "--restarts", "3", "--extended-case", str(out),
+                 "--json", str(js)]) == 0
+    g = json.loads(js.read_text())["setups"]["D/F + F/D"]
+    case, ext = load_case("cases/hiss.toml"), load_case(out)
+    assert list(ext.fitting.weights) == g["weights"]
+    data = hp.read_csv(str(data_path), case)
+    after = hp.model_for(case, data.point, data.wrench).predict(np.array(g["weights"]))
+    got = hp.model_for(ext, data.point, data.wrench).predict(np.ones(case.fitting.n_weights))
+    diff = float(np.abs(got - after).max())
+    print(f"HISS round trip: largest twist difference {diff:.3g} (m / rad; noise 2e-5 m)")
+    # the weights enter as the same diagonal products; cond(K_i) ~ 1e9 leaves rounding at ~1e-9 relative
+    assert diff < 1e-6 * 2e-5

@@ -109,7 +109,7 @@ def register(app: typer.Typer) -> None:
         random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
         extended_case: str = typer.Option(None, "--extended-case", metavar="OUT.toml",
-                                          help="serial robot: write a copy of CASE with the identified joint stiffnesses"),
+                                          help="write a copy of CASE with the identified joint stiffnesses (serial robot) or weights (parallel_vjm)"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
         on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
@@ -125,12 +125,16 @@ def register(app: typer.Typer) -> None:
             return
         if data_path is None:
             raise IdentifyDataError("DATA.csv is required (or --world beam on a serial_robot case)")
+        if extended_case and not make:
+            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
+            refuse_input_overwrite(extended_case, [case_path, data_path])
+            check_output_file(extended_case, "--extended-case")
         if case.kind == "parallel_vjm":
             noise_mm = 0.02 if noise_mm is None else noise_mm
             from femcheck.cli._identify_hiss import identify_hiss
             identify_hiss(case, case_path, data_path, json_out=json_out, make=make, noise_rel=noise,
                           noise_mm=noise_mm, noise_deg=noise_deg, true_weights=true_weights, seed=seed,
-                          restarts=restarts)
+                          restarts=restarts, extended_case=extended_case)
             return
         if make:
             import os
@@ -148,10 +152,6 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {make_data(case, data_path, noise, seed=seed, world=w, noise_mm=nmm)} rows to {data_path}"
                        + (" (beam world)" if w is not None else ""))
             return
-        if extended_case:
-            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
-            refuse_input_overwrite(extended_case, [case_path, data_path])
-            check_output_file(extended_case, "--extended-case")
         vjm = case.vjm()
         ext = model is VJMModel.extended
         sets, q, W, dX = read_data(data_path, case.n_joints)

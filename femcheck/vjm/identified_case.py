@@ -44,3 +44,21 @@ def identified_case_text(case, case_text: str, compliance: np.ndarray, standard_
                               f"95 % x {_stiffness_ci(ci[1], si[1])}, y {_stiffness_ci(ci[2], si[2])} N m/rad from {src}",
                               index=i))
     return edited(case_text, edits, "--extended-case")
+
+
+def weights_case_text(case, case_text: str, results: dict, data_path: str) -> str:
+    """``case_text`` with seed 001's identified weights as ``[fitting] weights`` (the links' stiffness becomes
+    W K W, eq. 10): the fit of both setups together when the data hold both, else the one setup's. Weights the case
+    already held are multiplied by the fitted ones (the fit was relative to them); the comment gives each weight's
+    95 % interval and names the unidentifiable ones (their value is the fit's, not a measurement)."""
+    name = "D/F + F/D" if "D/F + F/D" in results else next(iter(results))
+    g = results[name]
+    held = np.ones(case.fitting.n_weights) if case.fitting.weights is None else np.asarray(case.fitting.weights, float)
+    w = held * np.asarray(g["weights"], float)
+    def interval(k, lo, hi):
+        span = "no interval" if lo is None or hi is None else f"[{held[k] * lo:.4g}, {held[k] * hi:.4g}]"
+        return f"W{k + 1} {span}" + (" unidentifiable" if f"W{k + 1}" in g["unidentifiable"] else "")
+    ci = "; ".join(interval(k, lo, hi) for k, (lo, hi) in enumerate(zip(g["ci95_low"], g["ci95_high"])))
+    edit = Edit("fitting", "weights", [float(v) for v in w],
+                f"95 %: {ci}; from identify (seed 001 weight fit, setup {name}) on {data_path}")
+    return edited(case_text, [edit], "--extended-case")
