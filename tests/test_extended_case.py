@@ -210,7 +210,7 @@ def test_parallel_device_round_trip(tmp_path):
     rd = readings_from(case, data)
     joints = case.model.joint_rotations
     after = predict(case, rd, fitted, model="detailed", joints=joints)
-    got = predict(ext, rd, np.ones_like(d.scale), model="detailed", joints=joints)
+    got = predict(ext, rd, np.ones_like(s), model="detailed", joints=joints)
     diff = float(np.abs(got - after).max())
     print(f"parallel device round trip: largest prediction difference {diff:.3g} m")
     assert diff < 1e-6 * 2e-7      # the same factors multiply the same compliances: rounding only (noise 2e-7 m)
