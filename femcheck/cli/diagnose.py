@@ -89,12 +89,14 @@ def register(app: typer.Typer) -> None:
                      likelihood=likelihood)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
         result["warnings"] = list(result.get("warnings", [])) + mismatch
-        if json_out == "-":
-            typer.echo(json.dumps(result, indent=2, default=float))
-            return
-        if extended_case:
+        if extended_case:      # refused causes stop here (exit 2), before anything is written
             from femcheck.diagnose.extended_case import extended_case_text
             text = extended_case_text(case, Path(case_path).read_text(), d, model.value)
+        if json_out == "-":
+            typer.echo(json.dumps(result, indent=2, default=float))
+            if extended_case:
+                write_text_atomic(extended_case, text)
+            return
         if json_out:
             write_text_atomic(json_out, json.dumps(result, indent=2, default=float))
         if extended_case:

@@ -114,6 +114,13 @@ def register(app: typer.Typer) -> None:
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
         on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
         case = load_case_for(case_path, "identify", kinds=("serial_robot", "parallel_vjm"))
+        if extended_case and (make or world is not None):
+            raise IdentifyDataError("--extended-case writes the springs identified from DATA.csv; not with "
+                                    "--make-data or --world")
+        if extended_case:
+            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
+            refuse_input_overwrite(extended_case, [case_path, data_path])
+            check_output_file(extended_case, "--extended-case")
         if world is not None and case.kind != "serial_robot":
             raise IdentifyDataError(f"--world {world}: only for serial_robot cases; {case_path} is {case.kind!r}")
         if world is not None and not make:
@@ -125,10 +132,6 @@ def register(app: typer.Typer) -> None:
             return
         if data_path is None:
             raise IdentifyDataError("DATA.csv is required (or --world beam on a serial_robot case)")
-        if extended_case and not make:
-            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
-            refuse_input_overwrite(extended_case, [case_path, data_path])
-            check_output_file(extended_case, "--extended-case")
         if case.kind == "parallel_vjm":
             noise_mm = 0.02 if noise_mm is None else noise_mm
             from femcheck.cli._identify_hiss import identify_hiss
