@@ -596,9 +596,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         units = [u for g in pl.groups for u in g]
         rows = (tree.independent[units] if pl.spec.unit == "joint" else np.array(units, int)) \
             if pl.spec.unit != "single" else np.array([], int)
-        units_fitted.append((cid, pl.spec.flat, pl.groups, np.array(vals), np.array(ses),
-                             min(1.0, float(sum(p for ids, p in prob.items() if cid in ids)))))
-        causes.append({"id": cid, "probability": min(1.0, float(sum(p for ids, p in prob.items() if cid in ids))),
+        p_cause = min(1.0, float(sum(p for ids, p in prob.items() if cid in ids)))
+        units_fitted.append((cid, pl.spec.flat, pl.groups, np.array(vals), np.array(ses), p_cause))
+        causes.append({"id": cid, "probability": p_cause,
                        "params": params, "params_ci": ci, "location": place_text(pl, tree), "placement": pl.kind,
                        "joints": [tree.names[r] for r in rows], "physics": pl.spec.physics,
                        "placements_bic_alone": {k: float(v) for k, v in f.tried.items()}})
