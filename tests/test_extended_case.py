@@ -240,3 +240,85 @@ def test_hiss_weights_round_trip(tmp_path):
     print(f"HISS round trip: largest twist difference {diff:.3g} (m / rad; noise 2e-5 m)")
     # the weights enter as the same diagonal products; cond(K_i) ~ 1e9 leaves rounding at ~1e-9 relative
     assert diff < 1e-6 * 2e-5
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# every writable cause, without a diagnosis: the written keys reproduce the fitted effects
+# ---------------------------------------------------------------------------------------------------------------
+def _fit(effects, values):
+    """A stand-in for a diagnosis' leading fit (effects at values, intervals +-10 %)."""
+    class Fit:
+        pass
+    f = Fit()
+    f.effects, f.values = tuple(effects), tuple(np.asarray(v, float) for v in values)
+    f.ci_low, f.ci_high = tuple(0.9 * v for v in f.values), tuple(1.1 * v for v in f.values)
+
+    class D:
+        fit, causes = f, ()
+    return D()
+
+
+def test_6psu_every_writable_effect_round_trips(tmp_path):
+    """Element scales (a located one, link modulus, leg softening), joint-rotation release, friction, clearance and
+    the dial frame written into the case predict what the effects predict on the case as given (same chain, same
+    effect code: rounding only)."""
+    import femcheck
+    from femcheck.case.registry import load_case
+    from femcheck.diagnose import AnalyticalChainModel, predict_readings
+    from femcheck.diagnose.effects import get_effect
+    from femcheck.diagnose.extended_case import extended_case_text
+    from femcheck.experiment.simulate import simulate
+    from femcheck.measured import process
+    case = femcheck.load_case("cases/haptic_6psu.toml")
+    r = process(simulate(case, [], seed=3, directions=("+x", "+y", "+z")).data, case)
+    effects = [get_effect("actuation_in_legs").restricted([2, 5]), get_effect("link_modulus"),
+               get_effect("leg_softening"), get_effect("joint_rotation_release"), get_effect("friction_hysteresis"),
+               get_effect("clearance"), get_effect("sensor_misalignment")]
+    values = [[1.7, 2.2], [0.8], [1.0, 1.3, 1.0, 1.0, 1.0, 1.6], [0.05], [1.5], [2e-5, 0.0, 1e-5, 3.0],
+              [0.02, -0.01, 0.03]]
+    out = tmp_path / "all.toml"
+    out.write_text(extended_case_text(case, open("cases/haptic_6psu.toml").read(), _fit(effects, values), "detailed"))
+    ext = load_case(out)
+    want = predict_readings(AnalyticalChainModel(case, "detailed", "rigid"), r, effects, values)
+    got = predict_readings(AnalyticalChainModel(ext, "detailed", "rigid"), r)
+    # rotation vector -> matrix -> rotation vector of the dial frame: 1e-15 relative; 1e-9 of the deflection is far below
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
+    assert np.abs(got - predict_readings(AnalyticalChainModel(case, "detailed", "rigid"), r)).max() > 1e-6
+
+
+def test_serial_every_spring_round_trips(tmp_path):
+    """Torsion, tilt, backlash, link bending and mass scale as row keys: the corrected case's equilibrium equals the
+    fitted elastic parameters' (same tree code; 1/(1/c) and the mass product round to 1e-16 relative)."""
+    from femcheck.case.registry import load_case
+    from femcheck.robot.corrected_case import corrected_case_edits, marker_positions
+    from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout
+    from femcheck.robot.measurement_model import NuisanceLayout
+    from femcheck.robot.simulate import industrial_case, random_poses, to_toml
+    from femcheck.case.toml_edit import edited
+    case, raw = industrial_case(1, springs=True)
+    tree = case.tree
+    lay = flat_layout(tree)
+    inc = np.zeros(lay["mass_scale"].stop)
+    units = []
+    for kind, unit, v in (("torsion", 1, 4e-5), ("tilt", 3, 2e-4), ("backlash", 2, 1e-3), ("bending", 2, 1e-6),
+                          ("mass_scale", 0, 0.1)):
+        inc[lay[kind].start + unit] = v
+        units.append(({"torsion": "joint_torsion_compliance", "tilt": "joint_tilt_compliance", "backlash": "gear_clearance",
+                       "bending": "link_bending_compliance", "mass_scale": "mass_scale"}[kind], kind, ((unit,),),
+                      np.array([v]), np.array([0.1 * v]), 0.99))
+    params = ElasticParams.nominal(tree).shifted(tree, inc)
+    width = np.full(tree.n_joints, 3.0)
+
+    class D:
+        fitted = {"x": np.zeros(NuisanceLayout.of(tree, case.diagnosis).size), "params": params, "R": np.eye(3),
+                  "t": np.zeros(3), "backlash_width": width, "units": units, "kept": np.zeros(0, int),
+                  "nuisance_se": np.zeros(NuisanceLayout.of(tree, case.diagnosis).size)}
+    text = to_toml(raw)
+    out = tmp_path / "springs.toml"
+    out.write_text(edited(text, corrected_case_edits(case, D()), "test"))
+    ext = load_case(out)
+    q = random_poses(tree, 20, np.random.default_rng(1))
+    want = equilibrium(tree, q, None, params, case.diagnosis.fixed_point_passes, None, width).markers
+    got = marker_positions(ext, q)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)    # m; deflections are ~1e-3 m
+    assert "from gear_clearance" in out.read_text() and "mass scale" in out.read_text()
