@@ -37,7 +37,7 @@ def register(app: typer.Typer) -> None:
                                             "docs/diagnose.md)"),
         extended_case: str = typer.Option(None, "--extended-case", metavar="OUT.toml",
                                           help="write a copy of CASE with the named explanation as case keys, each "
-                                               "with its 95 % interval and cause (docs/diagnose.md)"),
+                                               "with its 95 % interval and the cause that set it"),
         compensation: str = typer.Option(None, "--compensation", metavar="OUT.csv",
                                          help="serial trees: predicted elastic deflection of each marker (mm) at the "
                                               "joint angles of --poses, by the extended model"),
