@@ -35,6 +35,46 @@ class LawScale:
     uj: float = quantity("-", default=1.0, doc="universal-joint line contact + pin bending compliance")
 
 
+_SIX = tuple[float, float, float, float, float, float]
+_ONES = (1.0,) * 6
+
+
+@dataclass(frozen=True)
+class LegScale:
+    """Per-leg factors on each element's compliance in the chain (``[model.leg_scale]``; 1 = the case's formula).
+
+    Where ``law_scale`` changes a law for every leg and every FE path that reuses it, a leg scale is what a
+    diagnosis found in the built device: one softer spherical joint in leg 2, say. It multiplies the element's
+    compliance of chain i in :func:`femcheck.chain.evaluate` (so ``stiffness``, ``map``, ``sweep`` and
+    ``diagnose`` see it); the FE paths do not, since a leg scale is not a law they share.
+    """
+
+    lg: _SIX = quantity("-", check="nonnegative", default=_ONES, doc="guideway compliance factor of legs 0..5")
+    act: _SIX = quantity("-", check="nonnegative", default=_ONES, doc="actuation compliance factor of legs 0..5")
+    sp: _SIX = quantity("-", check="nonnegative", default=_ONES, doc="spherical-joint compliance factor of legs 0..5")
+    prox: _SIX = quantity("-", check="nonnegative", default=_ONES, doc="proximal-link compliance factor of legs 0..5")
+    uj: _SIX = quantity("-", check="nonnegative", default=_ONES, doc="universal-joint compliance factor of legs 0..5")
+
+    def array(self) -> np.ndarray:
+        """(6, 5) factors, columns in the order of ``femcheck.chain.ELEMENTS``."""
+        return np.array([self.lg, self.act, self.sp, self.prox, self.uj], float).T
+
+
+@dataclass(frozen=True)
+class ReadingEffects:
+    """What a reading adds to the elastic deflection (``[model.reading]``): TCP friction, a dead band, the dial
+    frame. Each is the diagnosis effect of the same name (``femcheck.diagnose.effects``), held at a fixed value;
+    the measured-data paths (``diagnose``) apply them, the stiffness matrix does not contain them."""
+
+    friction_N: float = quantity("N", check="nonnegative", default=0.0,
+                                 doc="friction force reflected to the TCP (friction_hysteresis)")
+    clearance_gap_m: tuple[float, float, float] = quantity("m", check="nonnegative", default=(0.0, 0.0, 0.0),
+                                                           doc="dead band along x, y, z (clearance)")
+    clearance_closing_force_N: float = quantity("N", default=4.0, doc="force that closes 63 % of the dead band")
+    sensor_rotation_rad: tuple[float, float, float] = quantity("rad", check="any", default=(0.0, 0.0, 0.0),
+                                                               doc="rotation vector of the dial frame (sensor_misalignment)")
+
+
 @dataclass(frozen=True)
 class ModelOptions:
     joint_rotations: Literal["rigid", "released"] = option(
@@ -43,6 +83,11 @@ class ModelOptions:
     hertz_force: Literal["own_joint_force_at_test_load"] = option(
         "own_joint_force_at_test_load", doc="Hertz linearization force (CONVENTIONS.md §6)")
     law_scale: LawScale = LawScale()
+    leg_scale: LegScale = LegScale()
+    joint_rotation_compliance_rad_per_Nm: float = quantity(
+        "rad/(N m)", check="nonnegative", default=0.0,
+        doc="compliance of every passive S/U joint rotation for rigid joints (joint_rotation_release; 0 = rigid)")
+    reading: ReadingEffects = ReadingEffects()
 
 
 @dataclass(frozen=True)

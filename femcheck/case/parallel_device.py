@@ -42,6 +42,15 @@ class ModelOptions:
     joint_rotations: Literal["rigid", "released"] = option(
         "released", doc="rigid: passive joints carry moments; released: ideal joints (free passive rotations)")
     beam_shear: bool = option(False, doc="add Timoshenko shear L/(kappa G A) to the lateral beam terms")
+    element_scale: dict[str, tuple[float, ...]] | None = quantity(
+        "-", check="nonnegative", default=None,
+        doc="[model.element_scale]: per element kind (link names, drive, hertz_point, hertz_line, measured_law) one "
+            "factor per leg (symmetry copies included) on its compliance; written by diagnose --extended-case")
+
+    def __post_init__(self):
+        # held as sorted (kind, factors) pairs: the case is frozen and hashed (the resolved device is cached per case)
+        if isinstance(self.element_scale, dict):
+            object.__setattr__(self, "element_scale", tuple(sorted(self.element_scale.items())))
 
 
 @dataclass(frozen=True)

@@ -76,6 +76,9 @@ class Fitting:
     stiffness_scaling: Literal["linear", "quadratic"] = option(
         "linear", doc="eq. 10 read as K'_jj = w K_jj (linear, the reading under which the three Table 2 columns "
                       "predict the same device) or K'_jj = w^2 K_jj (quadratic, K' = W K W^T as printed)")
+    weights: tuple[float, ...] | None = quantity(
+        "-", default=None, doc="identified weights W1..Wp (eq. 12): the links' stiffness scaled by them under stiffness_scaling (written by "
+                               "identify --extended-case); absent = 1")
 
     def __post_init__(self):
         if len(self.weight_map) != 18:
@@ -83,6 +86,8 @@ class Fitting:
         used = sorted({i for i in self.weight_map if i >= 0})
         if any(i < -1 for i in self.weight_map) or used != list(range(len(used))):
             raise ValueError(f"weight_map: indices must be -1 or 0..p-1 without gaps; got {sorted(set(self.weight_map))}")
+        if self.weights is not None and len(self.weights) != len(used):
+            raise ValueError(f"weights: has {len(self.weights)} entries; expected {len(used)} (one per weight of weight_map)")
 
     @property
     def n_weights(self) -> int:
@@ -121,6 +126,10 @@ class ParallelVJMCase(CaseRecord):
         K = np.zeros((18, 18))
         for j, link in enumerate((L.crank, L.coupler, L.distal)):
             K[6 * j:6 * j + 6, 6 * j:6 * j + 6] = np.asarray(link.stiffness, dtype=float)
+        if self.fitting.weights is not None:      # the identified weights of a corrected case (seed 001 eq. 10)
+            from femcheck.vjm.weight_fitting import scaled_stiffness
+            K = scaled_stiffness(K, np.asarray(self.fitting.weights, float), self.fitting.weight_map,
+                                 self.fitting.stiffness_scaling)
         return K
 
     @property

@@ -16,6 +16,8 @@ TOML layout (SI; angles only in keys ending ``_deg``; docs/diagnose.md has an an
                       bending_EI_Nm2 (link after the row); size (a label that lumps joints of one size)
     [[markers]]       name, link (row name), offset_m (nominal, in the row's frame)
     [payload]         optional: link, com_m -- where the CSV's payload_kg hangs
+                      backlash_rad, backlash_torque_Nm (gear clearance and its take-up torque)
+    [sensor_frame]    optional: rotation_vector_rad, translation_m -- sensor <- base (a corrected case holds it)
     [measurement]     sigma_m (per-coordinate noise of a marker position, optional), folds
     [diagnosis]       fixed_point_passes, prior sigmas of the nuisance parameters (see ``DiagnosisOptions``)
 
@@ -71,6 +73,10 @@ class TreeJoint:
     tilt_stiffness_Nm_per_rad: tuple[float, float] | None = quantity("N m/rad", default=None,
                                                                      doc="nominal tilt springs about joint-frame x, y")
     bending_EI_Nm2: float | None = quantity("N m^2", default=None, doc="nominal bending stiffness of the row's link")
+    backlash_rad: float | None = quantity("rad", check="nonnegative", default=None,
+                                          doc="gear clearance of an independent joint: dq = b tanh(tau / tau_s); absent = none")
+    backlash_torque_Nm: float | None = quantity("N m", default=None,
+                                                doc="tau_s, torque over which the backlash takes up (default: the diagnosis')")
 
 
 @dataclass(frozen=True)
@@ -90,6 +96,18 @@ class Payload:
 class Measurement:
     sigma_m: float | None = quantity("m", default=None, doc="noise of one coordinate of a marker position (1 sigma)")
     folds: int = quantity("-", default=5, doc="K of the K-fold cross-validation over poses (CSV fold column wins)")
+
+
+@dataclass(frozen=True)
+class SensorFrame:
+    """Where the measuring system sees the base: x_sensor = R(rotation_vector_rad) p_base + translation_m. A
+    corrected case (``diagnose --extended-case``) holds the calibrated frame, so that it predicts the readings; the
+    diagnosis itself always calibrates the frame afresh."""
+
+    rotation_vector_rad: tuple[float, float, float] = quantity("rad", check="any", default=(0.0, 0.0, 0.0),
+                                                               doc="sensor <- base rotation (rotation vector)")
+    translation_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0),
+                                                         doc="base origin in the sensor frame")
 
 
 @dataclass(frozen=True)
@@ -117,6 +135,7 @@ class SerialTreeCase(CaseRecord):
     payload: Payload | None
     measurement: Measurement
     diagnosis: DiagnosisOptions
+    sensor_frame: SensorFrame = SensorFrame()
 
     kind = CASE_KIND
 
@@ -148,6 +167,8 @@ def _check_tree(ctx: Context, joints: tuple[TreeJoint, ...], markers, payload) -
                     raise ctx.error(f"joints[{i}].coupling.{k}", "is itself coupled; couple to independent rows")
                 if not math.isfinite(c):
                     raise ctx.error(f"joints[{i}].coupling.{k}", f"got {c}; expected a finite ratio")
+        if j.coupling is not None and (j.backlash_rad is not None or j.backlash_torque_Nm is not None):
+            raise ctx.error(f"joints[{i}].backlash_rad", "is set on a coupled row; backlash belongs to independent joints")
         names[j.name] = i
         out.append(dataclasses.replace(j, parent=parent, branch=branch))
     mnames = set()
@@ -168,8 +189,9 @@ def build(raw: dict, path) -> SerialTreeCase:
     """Validate a parsed TOML document into a :class:`SerialTreeCase` (errors name file and key)."""
     ctx = Context(path)
     parts = build_sections(ctx, raw, {"meta": Meta, "kinematics": TreeKinematics, "gravity": Gravity,
-                                      "measurement": Measurement, "diagnosis": DiagnosisOptions},
-                           optional=("meta", "gravity", "measurement", "diagnosis"),
+                                      "measurement": Measurement, "diagnosis": DiagnosisOptions,
+                                      "sensor_frame": SensorFrame},
+                           optional=("meta", "gravity", "measurement", "diagnosis", "sensor_frame"),
                            also_allowed=("joints", "markers", "payload"))
     for key in ("joints", "markers"):
         if not isinstance(raw.get(key), list) or not raw[key]:
@@ -186,4 +208,5 @@ def build(raw: dict, path) -> SerialTreeCase:
     if not np.all(np.isfinite(g)) or np.linalg.norm(g) == 0:
         raise ctx.error("gravity.vector_m_per_s2", "expected a finite, non-zero vector")
     return SerialTreeCase(meta=parts["meta"], kinematics=parts["kinematics"], gravity=parts["gravity"], joints=joints,
-                          markers=markers, payload=payload, measurement=parts["measurement"], diagnosis=parts["diagnosis"])
+                          markers=markers, payload=payload, measurement=parts["measurement"], diagnosis=parts["diagnosis"],
+                          sensor_frame=parts["sensor_frame"])

@@ -162,6 +162,23 @@ def _element_compliances_at_C(legs: LegGeometry, p: DeviceParameters, scale, adj
     return S_e
 
 
+def _with_case_extension(case, adjust: ChainAdjustments | None) -> ChainAdjustments:
+    """``adjust`` on top of what the case itself holds: its ``[model.leg_scale]`` factors multiply the element
+    scales, its ``joint_rotation_compliance_rad_per_Nm`` adds to the joint-rotation compliance (a corrected case
+    written by ``femcheck diagnose --extended-case``)."""
+    adjust = adjust or ChainAdjustments()
+    opts = getattr(case, "model", None)
+    legs = getattr(opts, "leg_scale", None)
+    c_case = float(getattr(opts, "joint_rotation_compliance_rad_per_Nm", 0.0))
+    if legs is None:
+        return adjust
+    f = legs.array()
+    if np.all(f == 1.0) and c_case == 0.0:
+        return adjust
+    scale = f if adjust.element_scale is None else np.asarray(adjust.element_scale, float) * f
+    return ChainAdjustments(element_scale=scale, joint_rotation_compliance=adjust.joint_rotation_compliance + c_case)
+
+
 def chain_element_compliances(case, poses, k_sp=None, *, model: str = "detailed", params=None,
                               adjust: ChainAdjustments | None = None) -> np.ndarray:
     """(n, 6, 5, 6, 6) compliance of element e of chain i carried to C_i, frame U (CONVENTIONS.md §4).
@@ -172,7 +189,7 @@ def chain_element_compliances(case, poses, k_sp=None, *, model: str = "detailed"
     P = as_poses(poses)
     legs = leg_geometry(case, P)
     p = _per_chain(params if params is not None else device_parameters(case))
-    adjust = adjust or ChainAdjustments()
+    adjust = _with_case_extension(case, adjust)
     scale = np.broadcast_to(_PRESENT[model] if adjust.element_scale is None else _PRESENT[model] * adjust.element_scale, (P.shape[0], 6, 5))
     S_e = _element_compliances_at_C(legs, p, scale, adjust, _element_ingredients(case, legs, p))
     if k_sp is not None and _PRESENT[model][0, _SP]:
@@ -222,7 +239,7 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
         legs = leg_geometry(case, P, labels=labels)
     elif legs.n != n:
         raise ValueError(f"legs: computed for {legs.n} poses, got {n} poses")
-    adjust = adjust or ChainAdjustments()
+    adjust = _with_case_extension(case, adjust)
     present = _PRESENT[model]
     scale = present if adjust.element_scale is None else present * np.asarray(adjust.element_scale, float)
     scale = np.broadcast_to(scale, (n, 6, 5))

@@ -97,7 +97,7 @@ def format_consistency(cc: dict, iso: dict) -> str:
 
 
 def identify_hiss(case, case_path: str, data_path: str, *, json_out, make: bool, noise_rel: float, noise_mm: float,
-                  noise_deg: float, true_weights: str, seed: int, restarts) -> None:
+                  noise_deg: float, true_weights: str, seed: int, restarts, extended_case=None) -> None:
     from femcheck.vjm import hiss_pipeline as hp
 
     if noise_rel:
@@ -120,6 +120,11 @@ def identify_hiss(case, case_path: str, data_path: str, *, json_out, make: bool,
     data = hp.read_csv(data_path, case)
     results = hp.run(case, data, noise_mm=noise_mm, noise_deg=noise_deg, restarts=restarts, seed=seed)
     cc, iso = column_consistency(case), isotropy_table(case)
+    if extended_case:
+        from pathlib import Path
+        from femcheck.report.atomic import write_text_atomic
+        from femcheck.vjm.identified_case import weights_case_text
+        write_text_atomic(extended_case, weights_case_text(case, Path(case_path).read_text(), results, data_path))
     if json_out:
         emit_json({"kind": "parallel_vjm", "units": {"translation": "mm", "rotation": "deg"},
                    "noise": {"mm": noise_mm, "deg": noise_deg}, "stiffness_scaling": case.fitting.stiffness_scaling,

@@ -168,7 +168,7 @@ def _write_report(case, case_path, out, sections, failures, check, solid, beam, 
     write_text_atomic(out / "report.html", render_html(title, intro, [head] + sections))
 
 
-def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out) -> None:
+def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out, extended_case=None) -> None:
     """Which element kind, and which leg, the measured deflections put the model's error in."""
     from femcheck.measured.csv_format import read_measured_csv
     from femcheck.parallel.diagnosis import diagnose as run
@@ -183,6 +183,11 @@ def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_
         raise typer.BadParameter(str(exc)) from None
     result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), "model": model,
               "joints": joints or case.model.joint_rotations, **d.as_json()}
+    if extended_case:
+        from pathlib import Path
+        from femcheck.parallel.extended_case import extended_case_text
+        from femcheck.report.atomic import write_text_atomic
+        write_text_atomic(extended_case, extended_case_text(case, Path(case_path).read_text(), d))
     if json_out:
         emit_json(result, json_out, inputs=[case_path, measured])
         if json_out == "-":

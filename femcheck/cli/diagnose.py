@@ -35,6 +35,15 @@ def register(app: typer.Typer) -> None:
                                        help="likelihood of the evidence: gauss (sigma known) or student (sigma's "
                                             "uncertainty from the trial scatter integrated out; default gauss; "
                                             "docs/diagnose.md)"),
+        extended_case: str = typer.Option(None, "--extended-case", metavar="OUT.toml",
+                                          help="write a copy of CASE with the named explanation as case keys, each "
+                                               "with its 95 % interval and the cause that set it"),
+        compensation: str = typer.Option(None, "--compensation", metavar="OUT.csv",
+                                         help="serial trees: predicted elastic deflection of each marker (mm) at the "
+                                              "joint angles of --poses, by the extended model"),
+        poses: str = typer.Option(None, "--poses", metavar="POSES.csv",
+                                  help="joint angles of the compensation table (columns q1_rad..qN_rad, optional "
+                                       "pose and payload_kg)"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -54,12 +63,16 @@ def register(app: typer.Typer) -> None:
         if report:
             check_output_dir(report, "--report")
         case = load_case_for(case_path, "diagnose", kinds=("haptic_6psu", "serial_tree", "serial_robot", "parallel_device"))
+        from femcheck.cli._extended_case import check_extended_outputs
+        check_extended_outputs(case, case_path, measured, extended_case, compensation, poses)
         if case.meta.kind in ("serial_tree", "serial_robot"):
-            return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds)
+            return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds,
+                                    extended_case, compensation, poses)
         if case.meta.kind == "parallel_device":
             from femcheck.cli._parallel_device import diagnose as diagnose_parallel
             return diagnose_parallel(case, case_path, measured, model=model.value,
-                                     joints=joints.value if joints else None, json_out=json_out)
+                                     joints=joints.value if joints else None, json_out=json_out,
+                                     extended_case=extended_case)
         for out in ((json_out,) if json_out != "-" else ()) + \
                 ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
@@ -78,11 +91,18 @@ def register(app: typer.Typer) -> None:
                          progress=bar)
         result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
         result["warnings"] = list(result.get("warnings", [])) + mismatch
+        if extended_case:      # refused causes stop here (exit 2), before anything is written
+            from femcheck.diagnose.extended_case import extended_case_text
+            text = extended_case_text(case, Path(case_path).read_text(), d, model.value)
         if json_out == "-":
             typer.echo(json.dumps(result, indent=2, default=float))
+            if extended_case:
+                write_text_atomic(extended_case, text)
             return
         if json_out:
             write_text_atomic(json_out, json.dumps(result, indent=2, default=float))
+        if extended_case:
+            write_text_atomic(extended_case, text)
         if report:
             from femcheck.diagnose.report import write_report
             write_report(d, readings, case, measured, report)
@@ -119,7 +139,8 @@ def register(app: typer.Typer) -> None:
             con.print(f"report: {Path(report) / 'report.html'}")
 
 
-def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds) -> None:
+def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds, extended_case=None,
+                     compensation=None, poses=None) -> None:
     """Self-weight diagnosis of a serial robot (a kinematic tree) from absolute marker positions (issue 23)."""
     import math
 
@@ -143,6 +164,9 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
         d = diagnose_tree(case, data, sigma_m=None if sigma_mm is None else sigma_mm * 1e-3, folds=folds,
                           progress=lambda s: bar.update(description=s))
     result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), **d.as_json()}
+    if extended_case or compensation:
+        from femcheck.cli._extended_case import write_serial_outputs
+        write_serial_outputs(case, case_path, d, extended_case, compensation, poses)
     if json_out:
         emit_json(result, json_out, inputs=[case_path, measured])
         if json_out == "-":

@@ -110,10 +110,19 @@ def register(app: typer.Typer) -> None:
         gravity: bool = typer.Option(False, "--gravity", help="--world: the measurements include the self-weight deflection"),
         random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
+        extended_case: str = typer.Option(None, "--extended-case", metavar="OUT.toml",
+                                          help="write a copy of CASE with the identified joint stiffnesses (serial robot) or weights (parallel_vjm)"),
     ):
         """Identify joint compliances by least squares (seed 002 eq. 10) and report the deflection errors;
         on a parallel_vjm (HISS) case, fit seed 001's weights and print its Tables 2-4 (--model is not used)."""
         case = load_case_for(case_path, "identify", kinds=("serial_robot", "parallel_vjm"))
+        if extended_case and (make or world is not None):
+            raise IdentifyDataError("--extended-case writes the springs identified from DATA.csv; not with "
+                                    "--make-data or --world")
+        if extended_case:
+            from femcheck.report.atomic import check_output_file, refuse_input_overwrite
+            refuse_input_overwrite(extended_case, [case_path, data_path])
+            check_output_file(extended_case, "--extended-case")
         if world is not None and case.kind != "serial_robot":
             raise IdentifyDataError(f"--world {world}: only for serial_robot cases; {case_path} is {case.kind!r}")
         if world is not None and not make:
@@ -130,7 +139,7 @@ def register(app: typer.Typer) -> None:
             from femcheck.cli._identify_hiss import identify_hiss
             identify_hiss(case, case_path, data_path, json_out=json_out, make=make, noise_rel=noise,
                           noise_mm=noise_mm, noise_deg=noise_deg, true_weights=true_weights, seed=seed,
-                          restarts=restarts)
+                          restarts=restarts, extended_case=extended_case)
             return
         if make:
             import os
@@ -174,6 +183,11 @@ def register(app: typer.Typer) -> None:
                "torsion_share": float(share[ident].mean()),
                "error_identification_pct": _errors(A[ident].reshape(-1, k), res.compliance, dX[ident]),
                "error_verification_pct": _errors(A[~ident].reshape(-1, k), res.compliance, dX[~ident])}
+        if extended_case:
+            from pathlib import Path
+            from femcheck.vjm.identified_case import identified_case_text
+            write_text_atomic(extended_case, identified_case_text(case, Path(case_path).read_text(), res.compliance,
+                                                                  res.standard_error, ext, data_path))
         if json_out:
             emit_json(out, json_out, inputs=[case_path, data_path])
         if json_out != "-":

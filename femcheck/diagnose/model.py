@@ -117,7 +117,9 @@ def predict_readings(model: ReadingModel, readings, effects=(), values=()) -> np
     m = len(readings.phase)
     st = WorkingState(force=np.array(readings.force, float), scale=np.array(np.broadcast_to(model.base_scale, (m, 6, 5))),
                       c_rot=0.0, extra=np.zeros((m, 3)), sensor=np.eye(3))
-    for eff, v in sorted(zip(effects, values), key=lambda ev: ev[0].stage):
+    from femcheck.diagnose.extended_case import case_reading_effects
+    held = case_reading_effects(model.case)     # a corrected case's [model.reading] effects come first at each stage
+    for eff, v in sorted(held + list(zip(effects, values)), key=lambda ev: ev[0].stage):
         eff.apply(model, readings, np.asarray(v, float), st)
     d = model.tcp_displacement(readings.pose, st.force, st.scale, st.c_rot) + st.extra
     return d @ st.sensor.T

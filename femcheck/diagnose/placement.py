@@ -82,7 +82,8 @@ class _Background:
         from femcheck.diagnose.model import WorkingState
         self.model, self.readings = model, readings
         m = len(readings.phase)
-        order = sorted(zip(effects, values), key=lambda ev: ev[0].stage)
+        from femcheck.diagnose.extended_case import case_reading_effects
+        order = sorted(case_reading_effects(model.case) + list(zip(effects, values)), key=lambda ev: ev[0].stage)
         st = WorkingState(force=np.array(readings.force, float),
                           scale=np.array(np.broadcast_to(model.base_scale, (m, 6, 5))), c_rot=0.0,
                           extra=np.zeros((m, 3)), sensor=np.eye(3))

@@ -223,12 +223,12 @@ def extended_case_text(case_text: str, case_path: str, results: list[dict]) -> s
     if "law_scale" in doc.get("model", {}):
         raise FemcheckError(f"{case_path}: [model.law_scale] is already set; expected a case without it "
                             "(the extended case multiplies the closed-form joint laws by the FE / closed-form ratio)")
+    from femcheck.case.toml_edit import append_table
     f = law_scale_factors(results)
-    lines = ["", "[model.law_scale]   # written by femcheck check-joints --extended-case: the FE-measured joint laws",
-             "                    # (axial eq. 1 secant of the contact FE / the closed form, mesh "
-             f"{results[0]['mesh']}, point {results[0]['point']})"]
-    lines += [f"{k} = {v:.6g}" for k, v in f.items()]
-    return case_text.rstrip("\n") + "\n" + "\n".join(lines) + "\n"
+    return append_table(case_text, "model.law_scale", {k: float(f"{v:.6g}") for k, v in f.items()},
+                        ("written by femcheck check-joints --extended-case: the FE-measured joint laws",
+                         "(axial eq. 1 secant of the contact FE / the closed form, mesh "
+                         f"{results[0]['mesh']}, point {results[0]['point']})"))
 
 
 def joint_table_html(rows: list[dict]) -> str:

@@ -187,7 +187,7 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     if state is None and backend == "compiled" and fused_available(device, joints):
         # inverse kinematics and chain model in one compiled call; the leg state is solved again only if asked for
         P = as_poses(poses)
-        W, scale = _load_and_scale(P.shape[0], L, len(names), wrench, element_scale)
+        W, scale = _load_and_scale(P.shape[0], L, len(names), wrench, element_scale, device.element_scale)
         out = evaluate_fused(device, P, W, scale, model, joints)
         if len(out) == 2:
             _raise_unreachable(device, P, *out)
@@ -199,7 +199,7 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     if not state.ok.all():
         k = int(np.flatnonzero(~state.ok)[0])
         _raise_unreachable(device, state.poses, k, next(i for i, s in enumerate(state.legs) if not s.ok[k]))
-    W, scale = _load_and_scale(n, L, len(names), wrench, element_scale)
+    W, scale = _load_and_scale(n, L, len(names), wrench, element_scale, device.element_scale)
     if backend == "compiled":
         out = evaluate_compiled(device, state, W, scale, model, joints)
         if out is not None:
@@ -263,11 +263,14 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
                    names, energy, k_h, len(history) + 1)
 
 
-def _load_and_scale(n, L, E, wrench, element_scale):
-    """The wrench (n, 6) and the element compliance factors (n, L, E) broadcast to the poses."""
+def _load_and_scale(n, L, E, wrench, element_scale, held=None):
+    """The wrench (n, 6) and the element compliance factors (n, L, E) broadcast to the poses; ``held`` (L, E): the
+    device's own factors (a corrected case's ``[model.element_scale]``), multiplying the given ones."""
     W = np.zeros((n, 6)) if wrench is None else np.array(np.broadcast_to(np.asarray(wrench, float), (n, 6)))
     scale = np.ones((n, L, E)) if element_scale is None else \
         np.array(np.broadcast_to(np.asarray(element_scale, float), (n, L, E)))
+    if held is not None:
+        scale = scale * held
     return W, scale
 
 

@@ -105,6 +105,9 @@ class ParallelDevice:
     home_pose: np.ndarray
     tcp_offset: np.ndarray
     beam_shear: bool = False
+    #: (L, E) factors on the compliance of element kind e in leg i that the case holds (``[model.element_scale]``);
+    #: None = 1 everywhere. :func:`femcheck.parallel.chain_model.evaluate` multiplies any scale it is given by it
+    element_scale: np.ndarray | None = None
 
     @property
     def n_legs(self) -> int:
@@ -270,6 +273,19 @@ def device_from_case(case, check_points: bool = False) -> ParallelDevice:
             legs.append(_resolve_leg(spec, i, copy, Q, R_home, home[:3], copies))
     dev = ParallelDevice(legs=tuple(legs), home_pose=home, tcp_offset=np.asarray(case.platform.tcp_offset_m, float),
                          beam_shear=case.model.beam_shear)
+    given = getattr(case.model, "element_scale", None)
+    if given:
+        names = dev.element_names
+        f = np.ones((dev.n_legs, len(names)))
+        for kind, values in dict(given).items():
+            if kind not in names:
+                raise DeviceError(f"model.element_scale.{kind}", f"{kind!r} is not an element kind of this device; "
+                                                                  f"expected one of {list(names)}")
+            if len(values) != dev.n_legs:
+                raise DeviceError(f"model.element_scale.{kind}", f"has {len(values)} factors; expected one per leg "
+                                                                  f"({dev.n_legs}, symmetry copies included)")
+            f[:, names.index(kind)] = values
+        dev = dataclasses.replace(dev, element_scale=f)
     if check_points:
         _check_device(case, dev)
     return dev

@@ -85,6 +85,9 @@ class FitResult:
     rms_before_mm: float
     rms_after_mm: float
     held_out_rms_mm: float
+    #: 95 % intervals (low (k,), high (k,)) of the factors: log factor +- 1.96 standard errors of the least squares
+    #: (Jacobian at the optimum, residual variance rss / (readings - k))
+    factors_ci: tuple = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,6 +99,10 @@ class ParallelDiagnosis:
     candidates: tuple[FitResult, ...]
     effects: tuple[tuple[str, float], ...]
     leg: tuple[str, float] | None
+    #: (L, E) element compliance factors of the kept candidate (what its "after" predictions use) and their 95 %
+    #: intervals (low (L, E), high (L, E)); cells the candidate does not fit are 1
+    scale: np.ndarray | None = None
+    scale_ci: tuple = ()
 
     def as_json(self) -> dict:
         def fit(f):
@@ -129,7 +136,9 @@ def _fit(case, rd: Readings, expand, n_par, *, model, joints, state, held_out: b
         if keep.size:
             s = least_squares(lambda th: residual(th, keep), sol.x, bounds=(-LOG_BOUND, LOG_BOUND))
             held.append(residual(s.x, out))
-    return sol.x, rms(r0), rms(sol.fun), (rms(np.concatenate(held)) if held else float("nan")), float(sol.fun @ sol.fun)
+    rss = float(sol.fun @ sol.fun)
+    se = np.sqrt(np.clip(np.diag(np.linalg.pinv(sol.jac.T @ sol.jac)), 0, None) * rss / max(sol.fun.size - n_par, 1))
+    return sol.x, rms(r0), rms(sol.fun), (rms(np.concatenate(held)) if held else float("nan")), rss, se
 
 
 def diagnose(case, data, *, model: str = "detailed", joints: str | None = None,
@@ -170,19 +179,20 @@ def diagnose(case, data, *, model: str = "detailed", joints: str | None = None,
     m = 3 * len(rd.labels)
     fits, scores = [], []
     for what, fnames, expand, k in specs:
-        th, r0, r1, _, rss = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=False)
-        fits.append((what, fnames, expand, k, th, r0, r1))
+        th, r0, r1, _, rss, se = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=False)
+        fits.append((what, fnames, expand, k, th, r0, r1, se))
         scores.append(m * np.log(max(rss, 1e-300) / m) + k * np.log(m))
-    what, fnames, expand, k, th, r0, r1 = fits[int(np.argmin(scores))]
-    _, _, _, held, _ = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=True)
-    best = FitResult(what, fnames, np.exp(th), r0, r1, held)
-    candidates = tuple(FitResult(w, n, np.exp(t), a, b, float("nan")) for w, n, _, _, t, a, b in fits)
+    what, fnames, expand, k, th, r0, r1, se = fits[int(np.argmin(scores))]
+    _, _, _, held, _, _ = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=True)
+    best = FitResult(what, fnames, np.exp(th), r0, r1, held, (np.exp(th - 1.96 * se), np.exp(th + 1.96 * se)))
+    candidates = tuple(FitResult(w, n, np.exp(t), a, b, float("nan")) for w, n, _, _, t, a, b, _ in fits)
     effects = tuple((n, float(np.exp(t))) for n, t in zip(fnames, th) if abs(t) > np.log1p(threshold))
     leg = None
     if what.endswith(" by leg") and effects:
         i = int(np.argmax(np.abs(th)))
         leg = (fnames[i], float(np.exp(th[i])))
-    return ParallelDiagnosis(best=best, candidates=candidates, effects=effects, leg=leg)
+    return ParallelDiagnosis(best=best, candidates=candidates, effects=effects, leg=leg, scale=expand(th),
+                             scale_ci=(expand(th - 1.96 * se), expand(th + 1.96 * se)))
 
 
 def simulate(case, scale, *, points=POINT_LABELS, directions=None, model: str = "detailed", joints: str | None = None,

@@ -152,6 +152,10 @@ class SerialDiagnosis:
     sigma_source: str
     skipped: tuple[str, ...]
     cause_fits: dict = dataclasses.field(default_factory=dict, repr=False)
+    #: the extended model as fitted ("after"), for writing the corrected case: nuisance ``x``, elastic ``params``,
+    #: sensor frame ``R``, ``t``, ``backlash_width`` (n_ind,) N m, ``predicted`` (R, 3) m, ``units`` (per named
+    #: cause: id, flat kind, unit groups, values, standard errors, probability)
+    fitted: dict = dataclasses.field(default_factory=dict, repr=False)
 
     def as_json(self) -> dict:
         w = self.weighing
@@ -170,6 +174,12 @@ class SerialDiagnosis:
 
 
 def _backlash_width(tree, data, opts) -> np.ndarray:
+    """(n_ind,) tanh take-up torque of each joint's backlash: the case row's ``backlash_torque_Nm`` where given."""
+    w = _default_backlash_width(tree, data, opts)
+    return np.where(np.isfinite(tree.backlash_width), tree.backlash_width, w)
+
+
+def _default_backlash_width(tree, data, opts) -> np.ndarray:
     fk = forward(tree, data.q @ tree.coupling.T)
     _, M = gravity_wrenches(tree, fk, data.payload_kg)
     tau = np.abs(joint_torques(tree, fk, M))
@@ -563,6 +573,7 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     # ---- causes with probabilities, places and intervals ----------------------------------------------------
     prob = {tuple(sorted(e.ids)): p for e, p in zip(w.explanations, w.probability)}
     causes = []
+    units_fitted = []
     k0 = 0
     for cid in chosen:
         f = singles[cid]
@@ -585,7 +596,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         units = [u for g in pl.groups for u in g]
         rows = (tree.independent[units] if pl.spec.unit == "joint" else np.array(units, int)) \
             if pl.spec.unit != "single" else np.array([], int)
-        causes.append({"id": cid, "probability": min(1.0, float(sum(p for ids, p in prob.items() if cid in ids))),
+        p_cause = min(1.0, float(sum(p for ids, p in prob.items() if cid in ids)))
+        units_fitted.append((cid, pl.spec.flat, pl.groups, np.array(vals), np.array(ses), p_cause))
+        causes.append({"id": cid, "probability": p_cause,
                        "params": params, "params_ci": ci, "location": place_text(pl, tree), "placement": pl.kind,
                        "joints": [tree.names[r] for r in rows], "physics": pl.spec.physics,
                        "placements_bic_alone": {k: float(v) for k, v in f.tried.items()}})
@@ -623,17 +636,25 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
                            residual=residual, heldout=ho, leave_one_out=tuple(loo),
                            per_pose_error_mm_before=pose_err(e_before), per_pose_error_mm_after=pose_err(e_after),
                            pose_labels=data.pose_labels, warnings=tuple(warnings), sigma_m=float(sigma),
-                           sigma_source=src, skipped=tuple(skipped), cause_fits=singles)
+                           sigma_source=src, skipped=tuple(skipped), cause_fits=singles,
+                           fitted={"x": x_a, "params": params_a, "R": rotation(x_a[:3]) @ mm.R0, "t": mm.t0 + x_a[3:6],
+                                   "backlash_width": bw, "predicted": f_a.reshape(-1, 3), "units": units_fitted,
+                                   "kept": kept, "nuisance_se": _nuisance_se(mm, kept, lin)})
 
 
-def _nuisance_json(mm: MeasurementModel, x, kept, fixed, lin, sigma) -> dict:
+def _nuisance_se(mm: MeasurementModel, kept, lin) -> np.ndarray:
+    """(n_nuisance,) standard errors of the nuisance parameters (0 where fixed at nominal)."""
     lay = mm.layout
     pr = lin.projector(None)
     cov = np.zeros((lay.size, lay.size))
     Rinv = scipy.linalg.solve_triangular(pr.R, np.eye(pr.R.shape[0]))
-    ck = Rinv @ Rinv.T
-    cov[np.ix_(kept, kept)] = ck
-    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    cov[np.ix_(kept, kept)] = Rinv @ Rinv.T
+    return np.sqrt(np.clip(np.diag(cov), 0, None))
+
+
+def _nuisance_json(mm: MeasurementModel, x, kept, fixed, lin, sigma) -> dict:
+    lay = mm.layout
+    se = _nuisance_se(mm, kept, lin)
     ci = lambda i: [float(x[i] - 1.96 * se[i]), float(x[i] + 1.96 * se[i])] if i in set(kept) else [float(x[i]), float(x[i])]
     fixed_set = set(int(i) for i in fixed)
     R = (rotation(x[:3]) @ mm.R0)

@@ -40,7 +40,7 @@ class ElasticParams:
 
     @classmethod
     def nominal(cls, tree: RobotTree) -> "ElasticParams":
-        return cls(tree.compliance_torsion.copy(), tree.compliance_tilt.copy(), np.zeros(tree.n_joints),
+        return cls(tree.compliance_torsion.copy(), tree.compliance_tilt.copy(), tree.backlash.copy(),
                    tree.compliance_bending.copy(), 1.0)
 
     @property

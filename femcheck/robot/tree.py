@@ -113,6 +113,8 @@ class RobotTree:
     compliance_torsion: np.ndarray
     compliance_tilt: np.ndarray
     compliance_bending: np.ndarray
+    backlash: np.ndarray          # (n_ind,) rad, 0 = none
+    backlash_width: np.ndarray    # (n_ind,) N m, nan = the diagnosis' default
     marker_names: tuple[str, ...]
     marker_link: np.ndarray
     marker_offset: np.ndarray
@@ -167,6 +169,9 @@ class RobotTree:
                    static=static, has_static=has_static, coupling=E, independent=indep,
                    mass=np.array([j.mass_kg for j in J]), com=np.array([j.com_m for j in J], float),
                    compliance_torsion=ct, compliance_tilt=ctilt, compliance_bending=cb,
+                   backlash=np.array([J[i].backlash_rad or 0.0 for i in indep]),
+                   backlash_width=np.array([np.nan if J[i].backlash_torque_Nm is None else J[i].backlash_torque_Nm
+                                            for i in indep]),
                    marker_names=tuple(m.name for m in case.markers),
                    marker_link=np.array([index[m.link] for m in case.markers]),
                    marker_offset=np.array([m.offset_m for m in case.markers], float),
