@@ -34,7 +34,7 @@ from scipy.optimize import lsq_linear
 
 from femcheck.diagnose import evidence
 from femcheck.robot.causes import CAUSE_IDS, T_KEEP, VOCABULARY, Placement, candidate_placements, place_text
-from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout, joint_torques
+from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout, guide_overlap, guide_widths, joint_torques
 from femcheck.robot.measurement_model import MeasurementModel, identifiable_columns
 from femcheck.robot.positions import MarkerPositions
 from femcheck.robot.tree import forward, gravity_wrenches, rotation
@@ -171,8 +171,8 @@ class SerialDiagnosis:
 
 def _backlash_width(tree, data, opts) -> np.ndarray:
     fk = forward(tree, data.q @ tree.coupling.T)
-    _, M = gravity_wrenches(tree, fk, data.payload_kg)
-    tau = np.abs(joint_torques(tree, fk, M))
+    F, M = gravity_wrenches(tree, fk, data.payload_kg)
+    tau = np.abs(joint_torques(tree, fk, M, F))
     if opts.backlash_torque_Nm is not None:
         return np.full(tree.n_joints, opts.backlash_torque_Nm)
     med = np.median(tau, axis=0)
@@ -277,15 +277,23 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     nominal = ElasticParams.nominal(tree)
     bw = _backlash_width(tree, data, opts)
     _fk0 = forward(tree, data.q @ tree.coupling.T)
-    tau_ind = joint_torques(tree, _fk0, gravity_wrenches(tree, _fk0, data.payload_kg)[1])
-    mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw)
+    _F0, _M0 = gravity_wrenches(tree, _fk0, data.payload_kg)
+    tau_ind = joint_torques(tree, _fk0, _M0, _F0)
+    _overlap = guide_overlap(tree, data.q @ tree.coupling.T)
+    for r in np.flatnonzero(np.isfinite(_overlap).any(axis=0)):
+        if not np.all(_overlap[:, r] > 0):
+            from femcheck.errors import MeasuredDataError
+            k = int(np.argmin(_overlap[:, r]))
+            raise MeasuredDataError(data.source, None, f"pose {data.pose_labels[k]}", f"slides joint {tree.names[r]} to "
+                                    f"{data.q[k] @ tree.coupling[r]:.4g} m, beyond its guide overlap "
+                                    f"guide_overlap_m = {tree.guide_overlap[r]:.4g} m (L(q) = L0 - q must stay > 0)")
+    mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw, guide_widths(tree, _fk0, _M0))
     mm.align(nominal)
     say("calibrating the model as given (sensor frame, marker offsets, geometry)")
     lay = mm.layout
     # which geometry the data identify is decided on the rigid model: a direction only the elastic response
     # could see (the robot's tilt against gravity, say) would otherwise be calibrated into the effects diagnosed
-    rigid = ElasticParams(np.zeros(tree.n_joints), np.zeros((tree.n_rows, 2)), np.zeros(tree.n_joints),
-                          np.zeros(tree.n_rows), 1.0)
+    rigid = ElasticParams.rigid(tree)
     kept0, _, _ = identifiable_columns(mm.jacobian(np.zeros(lay.size), rigid) / work_sigma, lay.prior_sigma)
     x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say)
     f_b = mm.predict(x_b, nominal).ravel()
@@ -356,9 +364,17 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
         proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
         ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
+        rows_ok = spec.applies(tree)
+        if spec.unit == "joint":
+            ok &= rows_ok[tree.independent]
+        elif spec.unit in ("row", "link"):
+            ok &= rows_ok
         if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
             ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
         eligible = np.flatnonzero(ok)
+        if not rows_ok.any():
+            skipped.append(f"{spec.id}: the robot has no {'prismatic joint with a stated guide_overlap_m' if spec.rows == 'guided' else spec.rows + ' joint'}")
+            continue
         if not len(eligible):
             skipped.append(f"{spec.id}: no effect on the readings" +
                            (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
