@@ -17,8 +17,10 @@
    after, and the leave-one-group-out table (the named explanation with one cause removed).
 
 Noise. sigma is the case's ``[measurement] sigma_m`` or ``--sigma-mm``; else the pooled scatter of repeated poses
-(same joint angles); else -- stated as a warning -- the residual scatter of the richest explanation, with which
-the verdict cannot say ``unexplained``.
+(same joint angles); else -- stated as a warning and in ``sigma_source`` -- the K-fold held-out residual of the
+most flexible rival (every cause on every eligible joint at once), its parameters counted
+(:func:`heldout_sigma`): it does not depend on the explanation judged. The nuisance identifiability is then
+decided again at that sigma, and the search over explanations runs once, at it.
 """
 from __future__ import annotations
 
@@ -165,7 +167,8 @@ class SerialDiagnosis:
                 "heldout_max_error_mm_before": h["max_before"], "heldout_max_error_mm_after": h["max_after"],
                 "heldout_folds": h["folds"], "leave_one_out": list(self.leave_one_out),
                 "nuisance": self.nuisance, "identifiability": self.identifiability,
-                "sigma_source": self.sigma_source, "not_applicable": list(self.skipped),
+                "sigma_source": self.sigma_source, "sigma_is_estimate": self.sigma_source.startswith("estimated"),
+                "not_applicable": list(self.skipped),
                 "warnings": list(self.warnings)}
 
 
@@ -202,6 +205,25 @@ def _folds(data: MarkerPositions, k: int) -> np.ndarray:
     f = np.empty(data.n_poses, int)
     f[rng.permutation(data.n_poses)] = np.arange(data.n_poses) % k
     return f
+
+
+def heldout_sigma(lin: LinearRivals, B: np.ndarray, lb: np.ndarray, fold_of_row: np.ndarray, k_nuisance: int,
+                  sig: float) -> tuple[float, int]:
+    """sigma (m) from the K-fold held-out residual of the linear model [nuisance | B] (``lin`` weighted by ``sig``),
+    and the number k of parameters counted.
+
+    A reading predicted from a fit on the other folds (n_t = n (K-1)/K readings, k parameters) has the error
+    variance sigma^2 (1 + x^T (X_t^T X_t)^-1 x), whose mean over the readings is sigma^2 (1 + k / n_t); so
+    E[SS_heldout] = sigma^2 (n + k K / (K - 1)), the degrees of freedom the estimate divides by."""
+    ss = 0.0
+    folds = np.unique(fold_of_row)
+    for f in folds:
+        train, test = np.flatnonzero(fold_of_row != f), np.flatnonzero(fold_of_row == f)
+        d, th, _, _ = lin.fit(B, lb, np.full(len(lb), np.inf), train)
+        r = lin.predict_residual(d, th, B, test)
+        ss += float(r @ r)
+    K, k = len(folds), k_nuisance + B.shape[1]
+    return sig * math.sqrt(ss / (lin.r.size + k * K / (K - 1))), k
 
 
 def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols: np.ndarray | None = None,
@@ -271,7 +293,7 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     elif np.isfinite(sig_rep):
         sigma, src = sig_rep, f"repeated poses ({rep_dof} dof)"
     else:
-        sigma, src = float("nan"), "estimated from the residual of the richest explanation"
+        sigma, src = float("nan"), "estimated"
     work_sigma = sigma if np.isfinite(sigma) else 1e-4
     # ---- before: calibrate the model as given ---------------------------------------------------------------
     nominal = ElasticParams.nominal(tree)
@@ -298,12 +320,22 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say)
     f_b = mm.predict(x_b, nominal).ravel()
     Jn = mm.jacobian(x_b, nominal, base=f_b)
-    kept, fixed, cond = identifiable_columns(mm.jacobian(x_b, rigid) / work_sigma, lay.prior_sigma)
-    if set(kept) != set(kept0):
-        # the identifiable set seen at the calibrated point differs from the one at the start: calibrate those too
-        x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept, x0=x_b, progress=say)
-        f_b = mm.predict(x_b, nominal).ravel()
-        Jn = mm.jacobian(x_b, nominal, base=f_b)
+    J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
+
+    def identify(sig, kept_before):
+        """The identifiable nuisance set decided at ``sig`` on the rigid Jacobian at the calibrated point; when it
+        differs from ``kept_before``, those columns are calibrated too (and the point's Jacobians redone)."""
+        nonlocal x_b, f_b, Jn, J_rigid
+        kept, fixed, cond = identifiable_columns(J_rigid / sig, lay.prior_sigma)
+        if set(kept) != set(kept_before):
+            x_b, _ = calibrate(mm, nominal, sig, cols=kept, x0=x_b, progress=say)
+            f_b = mm.predict(x_b, nominal).ravel()
+            Jn = mm.jacobian(x_b, nominal, base=f_b)
+            J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
+            return kept, fixed, cond, True
+        return kept, fixed, cond, False
+
+    kept, fixed, cond, _ = identify(work_sigma, kept0)
     say("linearizing the elastic causes")
     E = mm.elastic_jacobian(x_b, nominal, base=f_b)
     reading_of_row = np.repeat(np.arange(data.n_readings), 3)
@@ -316,7 +348,6 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         return LinearRivals((data.xyz.ravel() - f_b) / sig, Jn[:, kept] / sig, P, p, E / sig, reading_of_row)
 
     lin = build(work_sigma)
-    lin_sigma = [work_sigma]
     # ---- the vocabulary: each cause in its best placement ------------------------------------------------
     lay_f = flat_layout(tree)
     n_data = 3 * data.n_readings
@@ -354,33 +385,63 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         k = pl.n_params
         return pl, B, lb, ub, th[:k], se[:k], chi2
 
-    skipped = []
-    eligible_of: dict[str, np.ndarray] = {}
     spec_of = {s.id: s for s in VOCABULARY}
-    pr0 = lin.projector(None)
-    for spec in VOCABULARY:
-        sub = lin.E[:, lay_f[spec.flat]]
-        full = np.linalg.norm(sub, axis=0)
-        padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
-        proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
-        ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
-        rows_ok = spec.applies(tree)
-        if spec.unit == "joint":
-            ok &= rows_ok[tree.independent]
-        elif spec.unit in ("row", "link"):
-            ok &= rows_ok
-        if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
-            ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
-        eligible = np.flatnonzero(ok)
-        if not rows_ok.any():
-            skipped.append(f"{spec.id}: the robot has no {'prismatic joint with a stated guide_overlap_m' if spec.rows == 'guided' else spec.rows + ' joint'}")
-            continue
-        if not len(eligible):
-            skipped.append(f"{spec.id}: no effect on the readings" +
-                           (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
-                            " that the nuisance parameters cannot absorb"))
-            continue
-        eligible_of[spec.id] = eligible
+
+    def eligibility(lin) -> tuple[dict[str, np.ndarray], list[str]]:
+        """{cause id: eligible units} (units whose column the nuisance block does not absorb) and the reasons of
+        the causes left out."""
+        skipped, eligible_of = [], {}
+        pr0 = lin.projector(None)
+        for spec in VOCABULARY:
+            sub = lin.E[:, lay_f[spec.flat]]
+            full = np.linalg.norm(sub, axis=0)
+            padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
+            proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
+            ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
+            rows_ok = spec.applies(tree)
+            if spec.unit == "joint":
+                ok &= rows_ok[tree.independent]
+            elif spec.unit in ("row", "link"):
+                ok &= rows_ok
+            if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
+                ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
+            eligible = np.flatnonzero(ok)
+            if not rows_ok.any():
+                skipped.append(f"{spec.id}: the robot has no "
+                               f"{'prismatic joint with a stated guide_overlap_m' if spec.rows == 'guided' else spec.rows + ' joint'}")
+                continue
+            if not len(eligible):
+                skipped.append(f"{spec.id}: no effect on the readings" +
+                               (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
+                                " that the nuisance parameters cannot absorb"))
+                continue
+            eligible_of[spec.id] = eligible
+        return eligible_of, skipped
+
+    fold = _folds(data, K)
+    fold_of_row = np.repeat(fold[data.pose], 3)
+    eligible_of, skipped = eligibility(lin)
+    if not np.isfinite(sigma):
+        # sigma from what does not depend on the explanation judged: the held-out residual of the most flexible
+        # rival (every cause on every eligible unit at once); then identifiability is decided again at that sigma
+        say("estimating sigma from the held-out residual of the most flexible rival")
+        units = sorted({lay_f[spec_of[c].flat].start + int(u) for c, us in eligible_of.items() for u in us})
+        B = lin.E[:, units]
+        lower = {lay_f[sp.flat].start + int(u): sp.lower for sp in VOCABULARY if sp.id in eligible_of
+                 for u in eligible_of[sp.id]}
+        lb = np.array([-nom_flat[i] if lower[i] == "nominal" else float(lower[i]) for i in units])
+        sigma, k_flex = heldout_sigma(lin, B, lb, fold_of_row, len(kept), work_sigma)
+        src = (f"estimated: {len(np.unique(fold))}-fold held-out residual of the most flexible rival (every cause on "
+               f"every eligible joint, {k_flex} parameters with the nuisance, counted)")
+        warnings.append(f"sigma not stated and no repeated poses: sigma = {sigma * 1e3:.3f} mm from the held-out residual "
+                        f"of the most flexible rival; state [measurement] sigma_m (or --sigma-mm) for a verdict that "
+                        "can tell an effect outside the vocabulary")
+        kept, fixed, cond, moved = identify(sigma, kept)
+        if moved:
+            E = mm.elastic_jacobian(x_b, nominal, base=f_b)
+        lin = build(sigma)
+        eligible_of, skipped = eligibility(lin)
+    lin_sigma = [sigma]
 
     def penalty(pl: Placement) -> float:
         """Extended-BIC term 2 ln C(p, k) of a per-joint placement that picked k of its p eligible units (the
@@ -488,15 +549,6 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     placed: dict[tuple, tuple] = {}
     say("fitting each cause in each placement; weighing none, singles and pairs")
     rv, singles = build_rivals(lin)
-    if not np.isfinite(sigma):
-        richest = min(rv, key=lambda e: e.chi2)
-        dof = max(n_data - richest.n_params - len(kept), 1)
-        sigma = work_sigma * float(np.sqrt(richest.chi2 / dof))
-        warnings.append(f"sigma not stated and no repeated poses: sigma = {sigma * 1e3:.3f} mm from the residual of "
-                        f"{richest.name}; state [measurement] sigma_m (or --sigma-mm) for a verdict that can say 'unexplained'")
-        lin = build(sigma)
-        lin_sigma[0] = sigma
-        rv, singles = build_rivals(lin)
     # every rival's chi^2 on the full nonlinear model (its linearization around the calibrated point can be off
     # by more than the noise when the causes move the geometry's best fit)
     say("refitting every rival on the nonlinear model")
@@ -505,8 +557,6 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     rv = [dataclasses.replace(e, chi2=refine(e.ids)[3]) for e in rv]
     # ---- cross-validation over poses: held-out residuals of any explanation -----------------------------------
     say(f"{K}-fold cross-validation over poses" if data.fold is None else "cross-validation over the CSV's folds")
-    fold = _folds(data, K)
-    fold_of_row = np.repeat(fold[data.pose], 3)
     _held: dict = {}
 
     def heldout_residual(ids) -> np.ndarray:
