@@ -227,9 +227,15 @@ def heldout_sigma(lin: LinearRivals, B: np.ndarray, lb: np.ndarray, fold_of_row:
 
 
 def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols: np.ndarray | None = None,
-              x0: np.ndarray | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+              x0: np.ndarray | None = None, progress=None, J0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Newton (Levenberg-Marquardt damped) calibration of the nuisance vector with the prior; returns
-    (x, kept columns)."""
+    (x, kept columns).
+
+    ``J0`` (3R, n_nuisance), unweighted: a Jacobian near ``x0`` to start from. The Jacobian (one forward-difference
+    prediction per column, the cost of the calibration) is kept over the steps while they lower the cost
+    (modified Gauss-Newton: every step is checked on the exact residual) and recomputed only when a step with it
+    fails; a stale Jacobian slows the convergence a little, it does not move the point it converges to by much,
+    and the linear rivals refit the nuisance at the calibrated point with a fresh one anyway."""
     lay = model.layout
     x = np.zeros(lay.size) if x0 is None else x0.copy()
     lam = 1e-3
@@ -242,8 +248,11 @@ def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols
         return float((((meas - f) / sigma) ** 2).sum() + (pri ** 2).sum())
 
     c = cost(x, f)
-    for it in range(GN_MAX_ITER):
-        J = model.jacobian(x, params, base=f) / sigma
+    J, fresh, evaluations = (None, False, 0) if J0 is None else (J0 / sigma, False, 0)
+    for it in range(4 * GN_MAX_ITER):
+        if J is None:
+            J, fresh = model.jacobian(x, params, base=f) / sigma, True
+            evaluations += 1
         if kept is None:
             kept, _, _ = identifiable_columns(J, lay.prior_sigma)
         Jk = J[:, kept]
@@ -252,21 +261,28 @@ def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols
         A = np.vstack([Jk, np.diag(1.0 / np.where(fin, ps, np.inf))[fin]])
         b = np.concatenate([(meas - f) / sigma, -x[kept][fin] / ps[fin]])
         H, g = A.T @ A, A.T @ b
+        lam_try = lam
         while True:
-            step = np.linalg.solve(H + lam * np.diag(np.diag(H) + 1e-30), g)
+            step = np.linalg.solve(H + lam_try * np.diag(np.diag(H) + 1e-30), g)
             xn = x.copy()
             xn[kept] += step
             fn = model.predict(xn, params).ravel()
             cn = cost(xn, fn)
-            if cn <= c or lam > 1e8:
+            if cn <= c or lam_try > 1e8 or (not fresh and lam_try > 1e-1):
                 break
-            lam *= 10
+            lam_try *= 10
         if progress:
             progress(f"calibration pass {it + 1}: chi2 {cn:.4g}")
+        if cn > c and not fresh:
+            J = None              # the kept Jacobian no longer gives a descent step: recompute it here
+            continue
         done = cn <= c and (c - cn) <= GN_RTOL * max(c, 1.0)
         if cn <= c:
-            x, f, c, lam = xn, fn, cn, max(lam / 10, 1e-9)
-        if done or lam > 1e8:
+            x, f, c, lam = xn, fn, cn, max(lam_try / 10, 1e-9)
+            fresh = False
+        else:
+            lam = lam_try
+        if done or lam > 1e8 or evaluations >= GN_MAX_ITER:
             break
     return x, kept
 
@@ -316,8 +332,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     # which geometry the data identify is decided on the rigid model: a direction only the elastic response
     # could see (the robot's tilt against gravity, say) would otherwise be calibrated into the effects diagnosed
     rigid = ElasticParams.rigid(tree)
-    kept0, _, _ = identifiable_columns(mm.jacobian(np.zeros(lay.size), rigid) / work_sigma, lay.prior_sigma)
-    x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say)
+    J_start = mm.jacobian(np.zeros(lay.size), rigid)
+    kept0, _, _ = identifiable_columns(J_start / work_sigma, lay.prior_sigma)
+    x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say, J0=J_start)
     f_b = mm.predict(x_b, nominal).ravel()
     Jn = mm.jacobian(x_b, nominal, base=f_b)
     J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
@@ -328,7 +345,7 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         nonlocal x_b, f_b, Jn, J_rigid
         kept, fixed, cond = identifiable_columns(J_rigid / sig, lay.prior_sigma)
         if set(kept) != set(kept_before):
-            x_b, _ = calibrate(mm, nominal, sig, cols=kept, x0=x_b, progress=say)
+            x_b, _ = calibrate(mm, nominal, sig, cols=kept, x0=x_b, progress=say, J0=Jn)
             f_b = mm.predict(x_b, nominal).ravel()
             Jn = mm.jacobian(x_b, nominal, base=f_b)
             J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
