@@ -11,6 +11,15 @@ from femcheck.case import load_case
 from femcheck.robot.tree import forward, rotation, rpy_matrix
 
 
+def _joint_xml(name: str, j: dict) -> str:
+    """URDF text of joint ``name`` from its spec (type, parent, child, xyz, rpy, axis or None, mimic or None)."""
+    xyz, rpy, axis, mimic = j["xyz"], j["rpy"], j["axis"], j["mimic"]
+    ax = "" if axis is None else f'<axis xyz="{axis[0]} {axis[1]} {axis[2]}"/>'
+    mm = "" if mimic is None else f'<mimic joint="{mimic[0]}" multiplier="{mimic[1]}" offset="{mimic[2]}"/>'
+    return (f'<joint name="{name}" type="{j["type"]}"><parent link="{j["parent"]}"/><child link="{j["child"]}"/>'
+            f'<origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>{ax}{mm}</joint>')
+
+
 def _urdf(rng) -> tuple[str, dict]:
     """A torso with two 3-joint arms (random origins and axes, one fixed joint in each arm, one mimic joint)."""
     joints, links = [], ["base_link"]
@@ -20,10 +29,7 @@ def _urdf(rng) -> tuple[str, dict]:
         xyz, rpy = rng.uniform(-0.2, 0.2, 3), rng.uniform(-1.5, 1.5, 3)
         spec[name] = dict(type=jtype, parent=parent, child=child, xyz=xyz, rpy=rpy, axis=axis, mimic=mimic)
         links.append(child)
-        ax = "" if axis is None else f'<axis xyz="{axis[0]} {axis[1]} {axis[2]}"/>'
-        mm = "" if mimic is None else f'<mimic joint="{mimic[0]}" multiplier="{mimic[1]}" offset="{mimic[2]}"/>'
-        joints.append(f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
-                      f'<origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>{ax}{mm}</joint>')
+        joints.append(_joint_xml(name, spec[name]))
 
     add("mount", "fixed", "base_link", "pedestal")
     add("torso_yaw", "revolute", "pedestal", "torso", (0, 0, 1))
@@ -112,10 +118,7 @@ def _column_urdf(rng, telescope: bool = True) -> tuple[str, dict]:
         rpy = rng.uniform(-0.5, 0.5, 3) if rpy is None else np.asarray(rpy, float)
         spec[name] = dict(type=jtype, parent=parent, child=child, xyz=xyz, rpy=rpy, axis=axis, mimic=mimic)
         links.append(child)
-        ax = "" if axis is None else f'<axis xyz="{axis[0]} {axis[1]} {axis[2]}"/>'
-        mm = "" if mimic is None else f'<mimic joint="{mimic[0]}" multiplier="{mimic[1]}" offset="{mimic[2]}"/>'
-        joints.append(f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
-                      f'<origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>{ax}{mm}</joint>')
+        joints.append(_joint_xml(name, spec[name]))
 
     add("lift", "prismatic", "base_link", "column", (0.02, -0.01, 1.0), xyz=(0, 0, 0.3), rpy=(0, 0, 0))
     if telescope:

@@ -102,7 +102,8 @@ def candidate_placements(spec: CauseSpec, tree, eligible: np.ndarray) -> list[Pl
     if not units:
         return []
     rows = tree.independent[units] if spec.unit == "joint" else np.asarray(units)
-    out = [Placement(spec, "all", (tuple(units),), ("all",))]
+    # a cause with a single eligible joint (a robot's only linear axis, say) is named after it
+    out = [Placement(spec, "all", (tuple(units),), ("all",) if len(units) > 1 else (tree.names[int(rows[0])],))]
     for kind, labels in (("size", tree.size), ("branch", tree.branch)):
         lab = [labels[r] for r in rows]
         distinct = list(dict.fromkeys(lab))
@@ -120,6 +121,9 @@ def place_text(placement: Placement, tree, values: np.ndarray | None = None) -> 
     if spec.unit == "single":
         return "the whole robot (every link mass)"
     word = "links after joints" if spec.unit == "link" else "joints"
+    if placement.kind == "all" and len(placement.groups[0]) == 1:
+        rows = tree.independent[list(placement.groups[0])] if spec.unit == "joint" else np.asarray(placement.groups[0])
+        return ("links after " if spec.unit == "link" else "") + tree.joint_place(rows)
     if placement.kind == "all":
         return f"all {word} (one lumped value)"
     if placement.kind in ("size", "branch"):

@@ -207,6 +207,13 @@ def _folds(data: MarkerPositions, k: int) -> np.ndarray:
     return f
 
 
+def _fd_step(theta: np.ndarray, j: int) -> np.ndarray:
+    """Forward-difference step on cause parameter j: 1e-3 of its value (1e-9 absolute floor), zeros elsewhere."""
+    h = np.zeros(len(theta))
+    h[j] = max(1e-3 * abs(theta[j]), 1e-9)
+    return h
+
+
 def heldout_sigma(lin: LinearRivals, B: np.ndarray, lb: np.ndarray, fold_of_row: np.ndarray, k_nuisance: int,
                   sig: float) -> tuple[float, int]:
     """sigma (m) from the K-fold held-out residual of the linear model [nuisance | B] (``lin`` weighted by ``sig``),
@@ -547,19 +554,39 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
             big = np.argsort(-np.abs(delta / np.where(np.isfinite(lay.prior_sigma[kept]), lay.prior_sigma[kept], 1.0)))[:4]
             log.debug("refine %s: largest nuisance steps %s; cause params %s", "+".join(key) or "none",
                       [(lay.names[kept[i]], float(delta[i])) for i in big], theta)
-        for _ in range(iterations):
-            f = mm.predict(x, params).ravel()
-            lin_k = LinearRivals((data.xyz.ravel() - f) / lin_sigma[0], lin.N, lin.P,
-                                 -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()], lin.E, reading_of_row)
-            d2, t2, _, _ = lin_k.fit(B_all, lb_all - theta, ub_all - theta, None)
-            log.debug("refine %s: chi2 %.2f before step", "+".join(key) or "none",
-                      float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()))
-            x[kept] += d2
-            theta = theta + t2
-            params = elastic(theta)
+        meas = data.xyz.ravel()
+        prior_chi2 = lambda x: float(((x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()]) ** 2).sum())
+        cost = lambda f, x: float((((meas - f) / lin_sigma[0]) ** 2).sum()) + prior_chi2(x)
         f = mm.predict(x, params).ravel()
-        chi2 = float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()) + \
-            float(((x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()]) ** 2).sum())
+        N, B, costs = lin.N, B_all, [cost(f, x)]
+        for it in range(2 * iterations):
+            if it == iterations:
+                # still falling by more than 1 % a step: the Jacobian of the calibrated point is too far from
+                # here (a cause that moves the geometry's best fit a long way); one fresh Jacobian at this point
+                if costs[-2] - costs[-1] <= max(0.01 * costs[-1], 1.0):
+                    break
+                N = mm.jacobian(x, elastic(theta), cols=kept, base=f) / lin_sigma[0]
+                B = np.column_stack([(mm.predict(x, elastic(theta + h)).ravel() - f) / (lin_sigma[0] * h[j])
+                                     for j, h in ((j, _fd_step(theta, j)) for j in range(len(theta)))]) \
+                    if len(theta) else B_all
+            lin_k = LinearRivals((meas - f) / lin_sigma[0], N, lin.P, -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()],
+                                 lin.E, reading_of_row)
+            d2, t2, _, _ = lin_k.fit(B, lb_all - theta, ub_all - theta, None)
+            # the first steps are taken whole (as before); the re-linearized ones are halved until they lower chi^2
+            for scale in ((1.0,) if it < iterations else (1.0, 0.5, 0.25, 0.125, 0.0625)):
+                x_n, theta_n = x.copy(), theta + scale * t2
+                x_n[kept] += scale * d2
+                f_n = mm.predict(x_n, elastic(theta_n)).ravel()
+                c_n = cost(f_n, x_n)
+                if c_n <= costs[-1]:
+                    break
+            log.debug("refine %s: step %d, chi2 %.2f -> %.2f", "+".join(key) or "none", it + 1, costs[-1], c_n)
+            if c_n > costs[-1] and it >= iterations:
+                break
+            x, theta, f = x_n, theta_n, f_n
+            costs.append(c_n)
+        params = elastic(theta)
+        chi2 = costs[-1]
         _refined[key] = (x, params, theta, chi2)
         return _refined[key]
 
