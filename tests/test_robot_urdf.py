@@ -193,3 +193,18 @@ def test_hidden_column_guide_clearance_is_found(tmp_path):
     (name, v), = c["params"].items()
     lo, hi = c["params_ci"][name]
     assert abs(v - eff["guide_clearance"]["lift"]) < 1.5 * (hi - lo), (v, eff, lo, hi)
+
+
+def test_a_slide_beyond_the_guide_overlap_is_bad_input(tmp_path, capsys):
+    """A pose whose column height leaves no guide engagement (q >= guide_overlap_m): exit 2, one line naming the
+    file, the q1_m column and the pose, no traceback."""
+    from femcheck.cli import main
+    from femcheck.robot.positions import format_marker_csv
+    from femcheck.robot.simulate import simulate_positions
+    case, _, out = _import_column(tmp_path, np.random.default_rng(4), overlap="0.3", telescope=False)
+    data, _ = simulate_positions(case, 20, sigma_m=2e-4, seed=1)       # heights up to 0.4 m > 0.3 m
+    tree = case.tree
+    (tmp_path / "d.csv").write_text(format_marker_csv(data, tree.marker_names, prismatic=tree.prismatic[tree.independent]))
+    assert main(["diagnose", str(out), str(tmp_path / "d.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "d.csv" in err and "q1_m" in err and "beyond its guide overlap" in err and err.count("\n") == 1, err

@@ -329,7 +329,9 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         if not np.all(_overlap[:, r] > 0):
             from femcheck.errors import MeasuredDataError
             k = int(np.argmin(_overlap[:, r]))
-            raise MeasuredDataError(data.source, None, f"pose {data.pose_labels[k]}", f"slides joint {tree.names[r]} to "
+            from femcheck.robot.positions import q_column
+            col = q_column(int(np.flatnonzero(tree.independent == r)[0]), True) if r in tree.independent else "q"
+            raise MeasuredDataError(data.source, None, col, f"pose {data.pose_labels[k]} slides joint {tree.names[r]} to "
                                     f"{data.q[k] @ tree.coupling[r]:.4g} m, beyond its guide overlap "
                                     f"guide_overlap_m = {tree.guide_overlap[r]:.4g} m (L(q) = L0 - q must stay > 0)")
     mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw, guide_widths(tree, _fk0, _M0))
