@@ -124,15 +124,18 @@ def guide_overlap(tree: RobotTree, q_rows: np.ndarray) -> np.ndarray:
 
 def equilibrium(tree: RobotTree, q_ind: np.ndarray, geometry: Geometry | None, params: ElasticParams,
                 passes: int = 2, payload_kg: np.ndarray | None = None, backlash_width: np.ndarray | None = None,
-                guide_width: np.ndarray | None = None) -> TreePoses:
+                guide_width: np.ndarray | None = None, start: tuple | None = None) -> TreePoses:
     """Deflected poses under self-weight: (m, n_ind) independent joint coordinates (rad; m on prismatic joints)
     -> :class:`TreePoses`.
 
     ``backlash_width`` (n_ind,) N m: tau_s of the tanh take-up (needed when any backlash is non-zero);
     ``guide_width`` (n,) N m: M_s of the guide play (needed when any guide clearance is non-zero).
+    ``start``: (poses, F, M, mass_scale) -- the undeflected :class:`TreePoses` of these joint coordinates and
+    geometry and the weights' wrenches there at that mass scale -- to skip recomputing them (many elastic
+    parameter sets at one point: a forward-difference Jacobian).
     """
     q_rows = q_ind @ tree.coupling.T
-    fk = forward(tree, q_rows, geometry)
+    fk = forward(tree, q_rows, geometry) if start is None else start[0]
     if params.is_rigid:
         return fk
     has_tilt, has_bend = bool(np.any(params.tilt)), bool(np.any(params.bending))
@@ -144,8 +147,11 @@ def equilibrium(tree: RobotTree, q_ind: np.ndarray, geometry: Geometry | None, p
         play = params.guide[guided] / overlap                  # (m, k) rad: the most the stage can tilt
     own = np.where(tree.coupled, params.torsion, 0.0)            # coupled rows' own series springs
     has_own = bool(np.any(own))
-    for _ in range(passes):
-        F, M = gravity_wrenches(tree, fk, payload_kg, params.mass_scale)
+    for k in range(passes):
+        if k == 0 and start is not None and start[3] == params.mass_scale:
+            F, M = start[1], start[2]
+        else:
+            F, M = gravity_wrenches(tree, fk, payload_kg, params.mass_scale)
         tau_rows = row_torques(tree, fk, M, F)
         tau = tau_rows @ tree.coupling
         dq = params.torsion[tree.independent] * tau

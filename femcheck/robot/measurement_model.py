@@ -26,7 +26,7 @@ import scipy.linalg
 
 from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout
 from femcheck.robot.positions import MarkerPositions
-from femcheck.robot.tree import ROW_PARAMS, STATIC_PARAMS, Geometry, RobotTree, rotation
+from femcheck.robot.tree import ROW_PARAMS, STATIC_PARAMS, Geometry, RobotTree, forward, gravity_wrenches, rotation
 
 #: relative pivot of the column-pivoted QR below which a nuisance direction counts as not identifiable
 RANK_RTOL = 1e-7
@@ -114,15 +114,17 @@ class MeasurementModel:
                 k += 6
         return Geometry(row=row, static=static, marker=marker)
 
-    def base_positions(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None) -> np.ndarray:
+    def base_positions(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None,
+                       start: tuple | None = None) -> np.ndarray:
         d = data or self.data
         fk = equilibrium(self.tree, d.q, self.geometry(x), params, self.passes, d.payload_kg, self.backlash_width,
-                         self.guide_width)
+                         self.guide_width, start)
         return fk.markers[d.pose, d.marker]
 
-    def predict(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None) -> np.ndarray:
-        """(R, 3) sensor-frame positions, m."""
-        p = self.base_positions(x, params, data)
+    def predict(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None,
+                start: tuple | None = None) -> np.ndarray:
+        """(R, 3) sensor-frame positions, m (``start``: see :func:`equilibrium`)."""
+        p = self.base_positions(x, params, data, start)
         R = rotation(x[:3]) @ self.R0
         return p @ R.T + self.t0 + x[3:6]
 
@@ -154,12 +156,16 @@ class MeasurementModel:
         for kind, sl in lay.items():
             steps[sl] = FD_ELASTIC[kind]
         guided = t.prismatic & np.isfinite(t.guide_overlap)
+        # every column starts from the same undeflected poses and weights: computed once
+        fk0 = forward(t, self.data.q @ t.coupling.T, self.geometry(x))
+        F0, M0 = gravity_wrenches(t, fk0, self.data.payload_kg, params.mass_scale)
+        start = (fk0, F0, M0, params.mass_scale)
         for j in range(n_flat):
             if lay["guide"].start <= j < lay["guide"].stop and not guided[j - lay["guide"].start]:
                 continue        # no guide geometry: the column stays zero (the cause does not apply there)
             dlt = np.zeros(n_flat)
             dlt[j] = steps[j]
-            J[:, j] = (self.predict(x, params.shifted(t, dlt)).ravel() - f0) / steps[j]
+            J[:, j] = (self.predict(x, params.shifted(t, dlt), start=start).ravel() - f0) / steps[j]
         return J
 
 
