@@ -149,6 +149,9 @@ def test_generated_case_round_trips_through_toml(tmp_path):
     (lambda r: r["joints"][2].update(name="t1"), "joints[2].name"),
     (lambda r: [j.update(mass_kg=0.0) for j in r["joints"]], "joints"),
     (lambda r: r["joints"][0].update(mass_kg=-1.0), "joints[0].mass_kg"),
+    (lambda r: r["joints"][0].update(type="spherical"), "joints[0].type"),
+    (lambda r: r["joints"][0].update(type="prismatic", stiffness_Nm_per_rad=1e3), "joints[0].stiffness_Nm_per_rad"),
+    (lambda r: r["joints"][1].update(guide_overlap_m=0.4), "joints[1].guide_overlap_m"),
 ])
 def test_bad_tree_cases_name_the_key(edit, key):
     from femcheck.errors import CaseError
@@ -167,3 +170,54 @@ def test_serial_robot_without_masses_is_refused_for_self_weight(tmp_path, capsys
     assert main(["diagnose", "cases/irb120.toml", str(csv)]) == 2
     err = capsys.readouterr().err
     assert "cases/irb120.toml: joints: no row has mass_kg > 0" in err and err.count("\n") == 1
+
+
+def test_coupled_row_own_spring_is_the_stationary_point_of_the_total_potential():
+    """A parallelogram row q5 = -(q2 + q3) with its own series spring, beside independent springs: the converged
+    self-weight equilibrium is where the total potential V_grav(q + E dq + e_5 s) + dq^2/(2 c) + s^2/(2 c_5) is
+    stationary. The reference solves that by fixed-point iteration on finite differences of the potential energy
+    alone (no wrench or coupling code). Tolerance 1e-9 m: central differences, h = 1e-6 rad, on ~1e-3 m moves."""
+    _, raw = industrial_case(0, springs=True)
+    raw["joints"][4]["coupling"] = {"j2": -1.0, "j3": -1.0}
+    raw["joints"][4]["stiffness_Nm_per_rad"] = 20.0
+    case = build_case(raw, "<parallelogram>")
+    tree = case.tree
+    assert tree.coupled[4] and tree.compliance_torsion[4] == pytest.approx(1 / 20.0)
+    q = np.random.default_rng(5).uniform(-1, 1, (3, tree.n_joints))
+    got = equilibrium(tree, q, None, ElasticParams.nominal(tree), passes=40).markers
+    c_ind, c_own = tree.compliance_torsion[tree.independent], tree.compliance_torsion[4]
+
+    def V(q_rows):
+        f = forward(tree, q_rows)
+        com = np.einsum("mnij,nj->mni", f.frames, np.append(tree.com, np.ones((tree.n_rows, 1)), axis=1))[..., :3]
+        return -(tree.mass[None, :, None] * com * tree.gravity).sum(axis=(1, 2))
+
+    E, e5, h = tree.coupling, np.eye(tree.n_rows)[4], 1e-6
+    dq, s = np.zeros_like(q), np.zeros(len(q))
+    for _ in range(40):
+        base = (q + dq) @ E.T + s[:, None] * e5
+        tau = np.stack([-(V(base + h * E[:, j]) - V(base - h * E[:, j])) / (2 * h) for j in range(tree.n_joints)], axis=1)
+        tau5 = -(V(base + h * e5) - V(base - h * e5)) / (2 * h)
+        dq, s = c_ind * tau, c_own * tau5
+    ref = forward(tree, (q + dq) @ E.T + s[:, None] * e5).markers
+    assert np.abs(s).max() > 1e-3                      # the own spring really moves the row
+    assert np.abs(got - ref).max() < 1e-9
+
+
+def test_guide_play_tilts_the_stage_by_clearance_over_overlap():
+    """A lifting column (prismatic row, guide overlap L0 = 0.5 m) with an overhanging mass: once the moment is well
+    over the take-up width, the stage tilts by delta / (L0 - q) about the carriage, so a marker 1 m above it moves by
+    the chord 2 sin(phi / 2) * 1 m, towards the moment. Closed form; tolerance 1e-12 m (round-off)."""
+    raw = {"meta": {"kind": "serial_tree", "name": "column"}, "kinematics": {"convention": "standard"},
+           "joints": [{"name": "lift", "type": "prismatic", "a_m": 0.0, "alpha_deg": 0.0, "d_m": 0.0,
+                       "guide_overlap_m": 0.5, "mass_kg": 20.0, "com_m": [0.3, 0.0, 0.0]}],
+           "markers": [{"name": "top", "link": "lift", "offset_m": [0.0, 0.0, 1.0]}]}
+    tree = build_case(raw, "<column>").tree
+    q = np.array([[0.0], [0.2], [0.4]])
+    delta = 1e-3
+    p = dataclasses.replace(ElasticParams.rigid(tree), guide=np.array([delta]))
+    rigid = forward(tree, q).markers[:, 0]
+    moved = equilibrium(tree, q, None, p, passes=2, guide_width=np.array([1e-9])).markers[:, 0]
+    phi = delta / (0.5 - q[:, 0])
+    assert np.allclose(np.linalg.norm(moved - rigid, axis=1), 2 * np.sin(phi / 2), rtol=0, atol=1e-12)
+    assert np.all(moved[:, 0] > rigid[:, 0])       # the overhang at +x leans the top towards +x

@@ -1,4 +1,4 @@
-"""The serial-tree case (issue 23): a robot whose kinematics is a tree of revolute DH rows, with link masses,
+"""The serial-tree case: a robot whose kinematics is a tree of revolute and prismatic DH rows, with link masses,
 gravity, markers, nominal joint springs, and the options of the self-weight diagnosis.
 
 TOML layout (SI; angles only in keys ending ``_deg``; docs/diagnose.md has an annotated template)::
@@ -7,19 +7,32 @@ TOML layout (SI; angles only in keys ending ``_deg``; docs/diagnose.md has an an
     [kinematics]      convention = "standard" | "modified"  (stated once for every row)
     [gravity]         vector_m_per_s2 = [0, 0, -9.81]  in the robot's base frame
     [[joints]]        one table per DH row, in the order of the CSV's q1..qN columns (coupled rows excepted):
-                      name, parent ("base" or an earlier row's name; default: the row before), branch (label
+                      name, type ("revolute", default, or "prismatic"), parent ("base" or an earlier row's name; default: the row before), branch (label
                       used to name places, default: the parent's branch, or "main"), a_m, alpha_deg, d_m,
                       theta_offset_deg; a static frame before the row: static_origin_m, static_rpy_deg (in the
                       parent's frame); coupling = {row = c, ...} for a passive row (q = sum c q_row, no CSV
                       column); mass_kg and com_m (the link carried by the row, in its frame); nominal springs:
-                      stiffness_Nm_per_rad (torsion; absent = rigid), tilt_stiffness_Nm_per_rad = [kx, ky],
-                      bending_EI_Nm2 (link after the row); size (a label that lumps joints of one size)
+                      stiffness_Nm_per_rad (torsion; absent = rigid; on a coupled row: the row's own spring, in
+                      series with its coupling, whose torque still reaches the driving rows by virtual work), tilt_stiffness_Nm_per_rad = [kx, ky],
+                      bending_EI_Nm2 (link after the row); size (a label that lumps joints of one size);
+                      backlash_rad, backlash_torque_Nm (gear clearance of an independent row and its take-up torque)
+                      prismatic rows: q (m) adds to d_m (the slide along the row's z), theta_offset_deg is the
+                      fixed theta; axial_stiffness_N_per_m (nominal axial spring of the drive; absent = rigid)
+                      instead of stiffness_Nm_per_rad; tilt_stiffness_Nm_per_rad: the moving stage's tilt springs
+                      at the carriage; guide_overlap_m (the length over which the stage's guide engages at q = 0;
+                      it shrinks as q grows: L(q) = guide_overlap_m - q; needed for the guide_clearance cause);
+                      guide_clearance_m (nominal diametral clearance of the guide; absent = none)
     [[markers]]       name, link (row name), offset_m (nominal, in the row's frame)
     [payload]         optional: link, com_m -- where the CSV's payload_kg hangs
-                      backlash_rad, backlash_torque_Nm (gear clearance and its take-up torque)
     [sensor_frame]    optional: rotation_vector_rad, translation_m -- sensor <- base (a corrected case holds it)
     [measurement]     sigma_m (per-coordinate noise of a marker position, optional), folds
     [diagnosis]       fixed_point_passes, prior sigmas of the nuisance parameters (see ``DiagnosisOptions``)
+
+Prismatic rows (frames as above with theta fixed and d = d_m + q): the row's *joint frame* is the carriage,
+``parent * S Rz(theta) Tz(d)`` (standard) or ``parent * S Rx(alpha) Tx(a) Rz(theta) Tz(d)`` (modified); the stage's
+tilt springs and its guide play turn the rest of the row about the carriage. The CSV column of a prismatic
+joint is ``qK_m`` (metres) instead of ``qK_rad``. A coupled row may follow prismatic rows (``coupling`` ratios then
+in rad/m or m/m).
 
 Frames. Standard DH: ``T_row = S Rz(theta) Tz(d) Tx(a) Rx(alpha)``, the joint turns about the z axis of
 ``parent * S``; modified (Craig): ``T_row = S Rx(alpha) Tx(a) Rz(theta) Tz(d)``, the joint turns about the
@@ -59,6 +72,7 @@ class TreeJoint:
     alpha_deg: float = quantity("deg", check="any")
     d_m: float = quantity("m", check="any")
     theta_offset_deg: float = quantity("deg", check="any", default=0.0, doc="theta = q + offset")
+    type: Literal["revolute", "prismatic"] = option("revolute", doc="revolute (q turns theta) or prismatic (q slides d)")
     parent: str = option("", doc="'base' or an earlier row; default: the row before")
     branch: str = option("", doc="label of the branch (e.g. 'right_arm'); default: the parent's, or 'main'")
     size: str = option("", doc="label lumping joints of one size (causes may be fitted per size)")
@@ -69,7 +83,8 @@ class TreeJoint:
     coupling: dict[str, float] | None = option(None, doc="passive row: q = sum_j c_j q_j over the named rows")
     mass_kg: float = quantity("kg", check="nonnegative", default=0.0)
     com_m: tuple[float, float, float] = quantity("m", check="any", default=(0.0, 0.0, 0.0), doc="centre of mass in the row's frame")
-    stiffness_Nm_per_rad: float | None = quantity("N m/rad", default=None, doc="nominal torsion spring; absent = rigid")
+    stiffness_Nm_per_rad: float | None = quantity("N m/rad", default=None,
+                                                  doc="nominal torsion spring (a coupled row: its own, in series with the coupling); absent = rigid")
     tilt_stiffness_Nm_per_rad: tuple[float, float] | None = quantity("N m/rad", default=None,
                                                                      doc="nominal tilt springs about joint-frame x, y")
     bending_EI_Nm2: float | None = quantity("N m^2", default=None, doc="nominal bending stiffness of the row's link")
@@ -77,6 +92,12 @@ class TreeJoint:
                                           doc="gear clearance of an independent joint: dq = b tanh(tau / tau_s); absent = none")
     backlash_torque_Nm: float | None = quantity("N m", default=None,
                                                 doc="tau_s, torque over which the backlash takes up (default: the diagnosis')")
+    axial_stiffness_N_per_m: float | None = quantity("N/m", default=None,
+                                                     doc="prismatic rows: nominal axial spring of the drive; absent = rigid")
+    guide_overlap_m: float | None = quantity("m", default=None,
+                                             doc="prismatic rows: guide engagement length at q = 0; L(q) = guide_overlap_m - q")
+    guide_clearance_m: float | None = quantity("m", check="nonnegative", default=None,
+                                               doc="prismatic rows: nominal diametral clearance of the guide")
 
 
 @dataclass(frozen=True)
@@ -157,6 +178,12 @@ def _check_tree(ctx: Context, joints: tuple[TreeJoint, ...], markers, payload) -
         if parent != "base" and parent not in names:
             raise ctx.error(f"joints[{i}].parent", f"{parent!r} is not an earlier row; expected 'base' or one of {list(names)}")
         branch = j.branch or (out[names[parent]].branch if parent != "base" else "main")
+        if j.type == "prismatic" and j.stiffness_Nm_per_rad is not None:
+            raise ctx.error(f"joints[{i}].stiffness_Nm_per_rad", "is a torsion spring; a prismatic row takes axial_stiffness_N_per_m")
+        if j.type != "prismatic":
+            for key in ("axial_stiffness_N_per_m", "guide_overlap_m", "guide_clearance_m"):
+                if getattr(j, key) is not None:
+                    raise ctx.error(f"joints[{i}].{key}", 'applies to prismatic rows only; expected type = "prismatic"')
         if j.coupling is not None:
             if not j.coupling:
                 raise ctx.error(f"joints[{i}].coupling", "is empty; expected {row = c, ...}")

@@ -156,7 +156,8 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
     case = as_tree_case(case)
     tree = case.tree
     data = read_marker_csv(measured, tree.marker_names, tree.n_joints,
-                           tree.independent if tree.n_rows > tree.n_joints else None)
+                           tree.independent if tree.n_rows > tree.n_joints else None,
+                           tree.prismatic if tree.prismatic.any() else None)
     if data.n_poses < 10:
         from femcheck.errors import MeasuredDataError
         raise MeasuredDataError(measured, None, "pose", f"{data.n_poses} poses; expected at least 10 for a diagnosis")

@@ -134,7 +134,8 @@ def _simulate_serial(case, effect, foreign, seed, poses, sigma_mm, out, truth) -
         raise typer.BadParameter(f"{sigma_mm}; expected >= 0", param_hint="--sigma-mm")
     data, tr = simulate_positions(case, poses, effects=effects, foreign=fx, sigma_m=sigma_mm * 1e-3, seed=seed)
     write_text_atomic(out, format_marker_csv(data, tree.marker_names, meta={"generated_by": "femcheck experiment simulate",
-                                                                             "seed": seed}))
+                                                                             "seed": seed},
+                                             prismatic=tree.prismatic[tree.independent]))
     write_text_atomic(truth, json.dumps({"effects": effects, "foreign": fx, "sigma_m": sigma_mm * 1e-3, "seed": seed,
                                          "mass_scale": tr["params"].mass_scale,
                                          "sensor_rotation": tr["sensor_R"].tolist(), "sensor_translation_m": tr["sensor_t"].tolist()},

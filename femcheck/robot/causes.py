@@ -12,7 +12,8 @@ the placement with the smallest BIC stands for it:
   ``T_KEEP`` standard errors, or on its bound, is dropped), so the cause names the joints it sits in.
 
 Ids (contract): ``joint_torsion_compliance``, ``joint_tilt_compliance``, ``gear_clearance``,
-``link_bending_compliance``, ``mass_scale``.
+``link_bending_compliance``, ``mass_scale``; on prismatic rows: ``prismatic_axial_compliance``,
+``stage_tilt_compliance``, ``guide_clearance`` (the guide's play law is in :mod:`femcheck.robot.elastic`).
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ import numpy as np
 @dataclasses.dataclass(frozen=True)
 class CauseSpec:
     """``flat``: the slice of the flat elastic vector it moves; ``unit``: ``joint`` (independent joints), ``row``
-    (links) or ``single``; ``param``: parameter name with unit; ``lower``: bound on the increment, ``nominal``
+    (every row's joint, coupled rows included), ``link`` (the link after each row) or ``single``; ``param``: parameter name with unit; ``lower``: bound on the increment, ``nominal``
     (the total may not go below zero) or a number."""
 
     id: str
@@ -33,19 +34,41 @@ class CauseSpec:
     param: str
     lower: object
     physics: str
+    rows: str = "any"
+
+    def applies(self, tree) -> np.ndarray:
+        """(n,) bool: rows this cause may sit in (or whose link it may bend): ``rows`` is ``revolute``,
+        ``prismatic``, ``guided`` (prismatic rows with a stated guide overlap) or ``any``."""
+        if self.rows == "revolute":
+            return ~tree.prismatic
+        if self.rows == "prismatic":
+            return tree.prismatic.copy()
+        if self.rows == "guided":
+            return tree.prismatic & np.isfinite(tree.guide_overlap)
+        return np.ones(tree.n_rows, bool)
 
 
 VOCABULARY: tuple[CauseSpec, ...] = (
-    CauseSpec("joint_torsion_compliance", "torsion", "joint", "compliance_rad_per_Nm", "nominal",
-              "torsion spring of the drive (gear, belt, motor): dq = c tau"),
+    CauseSpec("joint_torsion_compliance", "torsion", "row", "compliance_rad_per_Nm", "nominal",
+              "torsion spring of the drive (gear, belt, motor), or of a coupled joint's own transmission in series "
+              "with its coupling: dq = c tau", "revolute"),
     CauseSpec("joint_tilt_compliance", "tilt", "row", "compliance_rad_per_Nm", "nominal",
-              "two transversal springs per joint (bearings, housing; seed 002): phi = c (M.x, M.y)"),
+              "two transversal springs per joint (bearings, housing; seed 002): phi = c (M.x, M.y)", "revolute"),
     CauseSpec("gear_clearance", "backlash", "joint", "backlash_rad", 0.0,
-              "backlash: the joint settles by b on the flank the gravity torque pushes it to, dq = b tanh(tau/tau_s)"),
-    CauseSpec("link_bending_compliance", "bending", "row", "compliance_per_Nm2", "nominal",
+              "backlash: the joint settles by b on the flank the gravity torque pushes it to, dq = b tanh(tau/tau_s)",
+              "revolute"),
+    CauseSpec("link_bending_compliance", "bending", "link", "compliance_per_Nm2", "nominal",
               "Euler-Bernoulli bending of the link after the joint under its tip load, c = 1/(EI)"),
     CauseSpec("mass_scale", "mass_scale", "single", "mass_scale_increment", -1.0,
               "the CAD masses off by a common factor s (needs an elastic element in the model)"),
+    CauseSpec("prismatic_axial_compliance", "torsion", "row", "compliance_m_per_N", "nominal",
+              "axial spring of a linear axis' drive (screw, belt, rack, hydraulics): dq = c F.z", "prismatic"),
+    CauseSpec("stage_tilt_compliance", "tilt", "row", "compliance_rad_per_Nm", "nominal",
+              "tilt springs of a linear axis' moving stage at its carriage (guide rails, rollers): "
+              "phi = c (M.x, M.y)", "prismatic"),
+    CauseSpec("guide_clearance", "guide", "row", "diametral_clearance_m", "nominal",
+              "play of a linear guide of diametral clearance delta engaged over L(q) = L0 - q: the stage tilts "
+              "by up to delta / L(q) towards its moment (grows as the overlap shrinks)", "guided"),
 )
 
 CAUSE_IDS = tuple(c.id for c in VOCABULARY)
@@ -79,7 +102,8 @@ def candidate_placements(spec: CauseSpec, tree, eligible: np.ndarray) -> list[Pl
     if not units:
         return []
     rows = tree.independent[units] if spec.unit == "joint" else np.asarray(units)
-    out = [Placement(spec, "all", (tuple(units),), ("all",))]
+    # a cause with a single eligible joint (a robot's only linear axis, say) is named after it
+    out = [Placement(spec, "all", (tuple(units),), ("all",) if len(units) > 1 else (tree.names[int(rows[0])],))]
     for kind, labels in (("size", tree.size), ("branch", tree.branch)):
         lab = [labels[r] for r in rows]
         distinct = list(dict.fromkeys(lab))
@@ -96,7 +120,10 @@ def place_text(placement: Placement, tree, values: np.ndarray | None = None) -> 
     spec = placement.spec
     if spec.unit == "single":
         return "the whole robot (every link mass)"
-    word = "joints" if spec.unit == "joint" else "links after joints"
+    word = "links after joints" if spec.unit == "link" else "joints"
+    if placement.kind == "all" and len(placement.groups[0]) == 1:
+        rows = tree.independent[list(placement.groups[0])] if spec.unit == "joint" else np.asarray(placement.groups[0])
+        return ("links after " if spec.unit == "link" else "") + tree.joint_place(rows)
     if placement.kind == "all":
         return f"all {word} (one lumped value)"
     if placement.kind in ("size", "branch"):
@@ -104,4 +131,4 @@ def place_text(placement: Placement, tree, values: np.ndarray | None = None) -> 
     units = [g[0] for g in placement.groups]
     rows = tree.independent[units] if spec.unit == "joint" else np.asarray(units)
     text = tree.joint_place(rows)
-    return text if spec.unit == "joint" else "links after " + text
+    return "links after " + text if spec.unit == "link" else text

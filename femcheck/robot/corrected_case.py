@@ -32,9 +32,6 @@ from femcheck.robot.elastic import ElasticParams, equilibrium
 from femcheck.robot.tree import Geometry, forward, homogeneous, rotation
 
 #: the cause behind each flat elastic kind (messages)
-_CAUSE = {"torsion": "joint_torsion_compliance", "bending": "link_bending_compliance"}
-
-
 def rpy_of(R: np.ndarray) -> np.ndarray:
     """Roll, pitch, yaw (rad) of R = Rz(yaw) Ry(pitch) Rx(roll), the inverse of
     :func:`femcheck.robot.tree.rpy_matrix` (|pitch| < 90 deg)."""
@@ -136,16 +133,26 @@ def _spring_edits(case, diagnosis, params: ElasticParams) -> list[Edit]:
 
     def inverse_edit(kind, unit, row, c, key, si_unit, word):
         """key = 1/c, refused where the fit leaves the element rigid (a rigid spring is an absent key)."""
-        _, s, text = why(kind, unit)
+        cid, s, text = why(kind, unit)
         if c <= 0:
-            raise FemcheckError(f"--extended-case: {_CAUSE[kind]} leaves {word} {J[row].name} rigid; the case holds a "
+            raise FemcheckError(f"--extended-case: {cid} leaves {word} {J[row].name} rigid; the case holds a "
                                 f"rigid element as an absent key, remove {key} by hand")
         return Edit("joints", key, 1.0 / c, _inverse_ci(c, s, si_unit, text), index=row)
 
+    for r in range(tree.n_rows):
+        if ("torsion", r) in source:      # a row's own spring: the drive's, a coupled row's series one, or axial
+            if tree.prismatic[r]:
+                edits.append(inverse_edit("torsion", r, r, float(params.torsion[r]), "axial_stiffness_N_per_m", "N/m",
+                                          "the slide of"))
+            else:
+                edits.append(inverse_edit("torsion", r, r, float(params.torsion[r]), "stiffness_Nm_per_rad", "N m/rad",
+                                          "joint"))
+        if ("guide", r) in source:
+            g = float(params.guide[r])
+            _, s, text = why("guide", r)
+            edits.append(Edit("joints", "guide_clearance_m", g, _ci(g, s, "m", text), index=r))
     for k, r in enumerate(tree.independent):
         r = int(r)
-        if ("torsion", k) in source:
-            edits.append(inverse_edit("torsion", k, r, float(params.torsion[k]), "stiffness_Nm_per_rad", "N m/rad", "joint"))
         if ("backlash", k) in source:
             b = float(params.backlash[k])
             _, s, text = why("backlash", k)

@@ -17,8 +17,10 @@
    after, and the leave-one-group-out table (the named explanation with one cause removed).
 
 Noise. sigma is the case's ``[measurement] sigma_m`` or ``--sigma-mm``; else the pooled scatter of repeated poses
-(same joint angles); else -- stated as a warning -- the residual scatter of the richest explanation, with which
-the verdict cannot say ``unexplained``.
+(same joint angles); else -- stated as a warning and in ``sigma_source`` -- the K-fold held-out residual of the
+most flexible rival (every cause on every eligible joint at once), its parameters counted
+(:func:`heldout_sigma`): it does not depend on the explanation judged. The nuisance identifiability is then
+decided again at that sigma, and the search over explanations runs once, at it.
 """
 from __future__ import annotations
 
@@ -34,7 +36,7 @@ from scipy.optimize import lsq_linear
 
 from femcheck.diagnose import evidence
 from femcheck.robot.causes import CAUSE_IDS, T_KEEP, VOCABULARY, Placement, candidate_placements, place_text
-from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout, joint_torques
+from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout, guide_overlap, guide_widths, joint_torques
 from femcheck.robot.measurement_model import MeasurementModel, identifiable_columns
 from femcheck.robot.positions import MarkerPositions
 from femcheck.robot.tree import forward, gravity_wrenches, rotation
@@ -169,7 +171,8 @@ class SerialDiagnosis:
                 "heldout_max_error_mm_before": h["max_before"], "heldout_max_error_mm_after": h["max_after"],
                 "heldout_folds": h["folds"], "leave_one_out": list(self.leave_one_out),
                 "nuisance": self.nuisance, "identifiability": self.identifiability,
-                "sigma_source": self.sigma_source, "not_applicable": list(self.skipped),
+                "sigma_source": self.sigma_source, "sigma_is_estimate": self.sigma_source.startswith("estimated"),
+                "not_applicable": list(self.skipped),
                 "warnings": list(self.warnings)}
 
 
@@ -181,8 +184,8 @@ def _backlash_width(tree, data, opts) -> np.ndarray:
 
 def _default_backlash_width(tree, data, opts) -> np.ndarray:
     fk = forward(tree, data.q @ tree.coupling.T)
-    _, M = gravity_wrenches(tree, fk, data.payload_kg)
-    tau = np.abs(joint_torques(tree, fk, M))
+    F, M = gravity_wrenches(tree, fk, data.payload_kg)
+    tau = np.abs(joint_torques(tree, fk, M, F))
     if opts.backlash_torque_Nm is not None:
         return np.full(tree.n_joints, opts.backlash_torque_Nm)
     med = np.median(tau, axis=0)
@@ -214,10 +217,42 @@ def _folds(data: MarkerPositions, k: int) -> np.ndarray:
     return f
 
 
+def _fd_step(theta: np.ndarray, j: int) -> np.ndarray:
+    """Forward-difference step on cause parameter j: 1e-3 of its value (1e-9 absolute floor), zeros elsewhere."""
+    h = np.zeros(len(theta))
+    h[j] = max(1e-3 * abs(theta[j]), 1e-9)
+    return h
+
+
+def heldout_sigma(lin: LinearRivals, B: np.ndarray, lb: np.ndarray, fold_of_row: np.ndarray, k_nuisance: int,
+                  sig: float) -> tuple[float, int]:
+    """sigma (m) from the K-fold held-out residual of the linear model [nuisance | B] (``lin`` weighted by ``sig``),
+    and the number k of parameters counted.
+
+    A reading predicted from a fit on the other folds (n_t = n (K-1)/K readings, k parameters) has the error
+    variance sigma^2 (1 + x^T (X_t^T X_t)^-1 x), whose mean over the readings is sigma^2 (1 + k / n_t); so
+    E[SS_heldout] = sigma^2 (n + k K / (K - 1)), the degrees of freedom the estimate divides by."""
+    ss = 0.0
+    folds = np.unique(fold_of_row)
+    for f in folds:
+        train, test = np.flatnonzero(fold_of_row != f), np.flatnonzero(fold_of_row == f)
+        d, th, _, _ = lin.fit(B, lb, np.full(len(lb), np.inf), train)
+        r = lin.predict_residual(d, th, B, test)
+        ss += float(r @ r)
+    K, k = len(folds), k_nuisance + B.shape[1]
+    return sig * math.sqrt(ss / (lin.r.size + k * K / (K - 1))), k
+
+
 def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols: np.ndarray | None = None,
-              x0: np.ndarray | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+              x0: np.ndarray | None = None, progress=None, J0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Newton (Levenberg-Marquardt damped) calibration of the nuisance vector with the prior; returns
-    (x, kept columns)."""
+    (x, kept columns).
+
+    ``J0`` (3R, n_nuisance), unweighted: a Jacobian near ``x0`` to start from. The Jacobian (one forward-difference
+    prediction per column, the cost of the calibration) is kept over the steps while they lower the cost
+    (modified Gauss-Newton: every step is checked on the exact residual) and recomputed only when a step with it
+    fails; a stale Jacobian slows the convergence a little, it does not move the point it converges to by much,
+    and the linear rivals refit the nuisance at the calibrated point with a fresh one anyway."""
     lay = model.layout
     x = np.zeros(lay.size) if x0 is None else x0.copy()
     lam = 1e-3
@@ -230,8 +265,11 @@ def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols
         return float((((meas - f) / sigma) ** 2).sum() + (pri ** 2).sum())
 
     c = cost(x, f)
-    for it in range(GN_MAX_ITER):
-        J = model.jacobian(x, params, base=f) / sigma
+    J, fresh, evaluations = (None, False, 0) if J0 is None else (J0 / sigma, False, 0)
+    for it in range(4 * GN_MAX_ITER):
+        if J is None:
+            J, fresh = model.jacobian(x, params, base=f) / sigma, True
+            evaluations += 1
         if kept is None:
             kept, _, _ = identifiable_columns(J, lay.prior_sigma)
         Jk = J[:, kept]
@@ -240,21 +278,28 @@ def calibrate(model: MeasurementModel, params: ElasticParams, sigma: float, cols
         A = np.vstack([Jk, np.diag(1.0 / np.where(fin, ps, np.inf))[fin]])
         b = np.concatenate([(meas - f) / sigma, -x[kept][fin] / ps[fin]])
         H, g = A.T @ A, A.T @ b
+        lam_try = lam
         while True:
-            step = np.linalg.solve(H + lam * np.diag(np.diag(H) + 1e-30), g)
+            step = np.linalg.solve(H + lam_try * np.diag(np.diag(H) + 1e-30), g)
             xn = x.copy()
             xn[kept] += step
             fn = model.predict(xn, params).ravel()
             cn = cost(xn, fn)
-            if cn <= c or lam > 1e8:
+            if cn <= c or lam_try > 1e8 or (not fresh and lam_try > 1e-1):
                 break
-            lam *= 10
+            lam_try *= 10
         if progress:
             progress(f"calibration pass {it + 1}: chi2 {cn:.4g}")
+        if cn > c and not fresh:
+            J = None              # the kept Jacobian no longer gives a descent step: recompute it here
+            continue
         done = cn <= c and (c - cn) <= GN_RTOL * max(c, 1.0)
         if cn <= c:
-            x, f, c, lam = xn, fn, cn, max(lam / 10, 1e-9)
-        if done or lam > 1e8:
+            x, f, c, lam = xn, fn, cn, max(lam_try / 10, 1e-9)
+            fresh = False
+        else:
+            lam = lam_try
+        if done or lam > 1e8 or evaluations >= GN_MAX_ITER:
             break
     return x, kept
 
@@ -281,31 +326,52 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     elif np.isfinite(sig_rep):
         sigma, src = sig_rep, f"repeated poses ({rep_dof} dof)"
     else:
-        sigma, src = float("nan"), "estimated from the residual of the richest explanation"
+        sigma, src = float("nan"), "estimated"
     work_sigma = sigma if np.isfinite(sigma) else 1e-4
     # ---- before: calibrate the model as given ---------------------------------------------------------------
     nominal = ElasticParams.nominal(tree)
     bw = _backlash_width(tree, data, opts)
     _fk0 = forward(tree, data.q @ tree.coupling.T)
-    tau_ind = joint_torques(tree, _fk0, gravity_wrenches(tree, _fk0, data.payload_kg)[1])
-    mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw)
+    _F0, _M0 = gravity_wrenches(tree, _fk0, data.payload_kg)
+    tau_ind = joint_torques(tree, _fk0, _M0, _F0)
+    _overlap = guide_overlap(tree, data.q @ tree.coupling.T)
+    for r in np.flatnonzero(np.isfinite(_overlap).any(axis=0)):
+        if not np.all(_overlap[:, r] > 0):
+            from femcheck.errors import MeasuredDataError
+            k = int(np.argmin(_overlap[:, r]))
+            from femcheck.robot.positions import q_column
+            col = q_column(int(np.flatnonzero(tree.independent == r)[0]), True) if r in tree.independent else "q"
+            raise MeasuredDataError(data.source, None, col, f"pose {data.pose_labels[k]} slides joint {tree.names[r]} to "
+                                    f"{data.q[k] @ tree.coupling[r]:.4g} m, beyond its guide overlap "
+                                    f"guide_overlap_m = {tree.guide_overlap[r]:.4g} m (L(q) = L0 - q must stay > 0)")
+    mm = MeasurementModel(tree, data, opts, opts.fixed_point_passes, bw, guide_widths(tree, _fk0, _M0))
     mm.align(nominal)
     say("calibrating the model as given (sensor frame, marker offsets, geometry)")
     lay = mm.layout
     # which geometry the data identify is decided on the rigid model: a direction only the elastic response
     # could see (the robot's tilt against gravity, say) would otherwise be calibrated into the effects diagnosed
-    rigid = ElasticParams(np.zeros(tree.n_joints), np.zeros((tree.n_rows, 2)), np.zeros(tree.n_joints),
-                          np.zeros(tree.n_rows), 1.0)
-    kept0, _, _ = identifiable_columns(mm.jacobian(np.zeros(lay.size), rigid) / work_sigma, lay.prior_sigma)
-    x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say)
+    rigid = ElasticParams.rigid(tree)
+    J_start = mm.jacobian(np.zeros(lay.size), rigid)
+    kept0, _, _ = identifiable_columns(J_start / work_sigma, lay.prior_sigma)
+    x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept0, progress=say, J0=J_start)
     f_b = mm.predict(x_b, nominal).ravel()
     Jn = mm.jacobian(x_b, nominal, base=f_b)
-    kept, fixed, cond = identifiable_columns(mm.jacobian(x_b, rigid) / work_sigma, lay.prior_sigma)
-    if set(kept) != set(kept0):
-        # the identifiable set seen at the calibrated point differs from the one at the start: calibrate those too
-        x_b, _ = calibrate(mm, nominal, work_sigma, cols=kept, x0=x_b, progress=say)
-        f_b = mm.predict(x_b, nominal).ravel()
-        Jn = mm.jacobian(x_b, nominal, base=f_b)
+    J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
+
+    def identify(sig, kept_before):
+        """The identifiable nuisance set decided at ``sig`` on the rigid Jacobian at the calibrated point; when it
+        differs from ``kept_before``, those columns are calibrated too (and the point's Jacobians redone)."""
+        nonlocal x_b, f_b, Jn, J_rigid
+        kept, fixed, cond = identifiable_columns(J_rigid / sig, lay.prior_sigma)
+        if set(kept) != set(kept_before):
+            x_b, _ = calibrate(mm, nominal, sig, cols=kept, x0=x_b, progress=say, J0=Jn)
+            f_b = mm.predict(x_b, nominal).ravel()
+            Jn = mm.jacobian(x_b, nominal, base=f_b)
+            J_rigid = Jn if nominal.is_rigid else mm.jacobian(x_b, rigid)
+            return kept, fixed, cond, True
+        return kept, fixed, cond, False
+
+    kept, fixed, cond, _ = identify(work_sigma, kept0)
     say("linearizing the elastic causes")
     E = mm.elastic_jacobian(x_b, nominal, base=f_b)
     reading_of_row = np.repeat(np.arange(data.n_readings), 3)
@@ -318,7 +384,6 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         return LinearRivals((data.xyz.ravel() - f_b) / sig, Jn[:, kept] / sig, P, p, E / sig, reading_of_row)
 
     lin = build(work_sigma)
-    lin_sigma = [work_sigma]
     # ---- the vocabulary: each cause in its best placement ------------------------------------------------
     lay_f = flat_layout(tree)
     n_data = 3 * data.n_readings
@@ -356,25 +421,63 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
         k = pl.n_params
         return pl, B, lb, ub, th[:k], se[:k], chi2
 
-    skipped = []
-    eligible_of: dict[str, np.ndarray] = {}
     spec_of = {s.id: s for s in VOCABULARY}
-    pr0 = lin.projector(None)
-    for spec in VOCABULARY:
-        sub = lin.E[:, lay_f[spec.flat]]
-        full = np.linalg.norm(sub, axis=0)
-        padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
-        proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
-        ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
-        if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
-            ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
-        eligible = np.flatnonzero(ok)
-        if not len(eligible):
-            skipped.append(f"{spec.id}: no effect on the readings" +
-                           (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
-                            " that the nuisance parameters cannot absorb"))
-            continue
-        eligible_of[spec.id] = eligible
+
+    def eligibility(lin) -> tuple[dict[str, np.ndarray], list[str]]:
+        """{cause id: eligible units} (units whose column the nuisance block does not absorb) and the reasons of
+        the causes left out."""
+        skipped, eligible_of = [], {}
+        pr0 = lin.projector(None)
+        for spec in VOCABULARY:
+            sub = lin.E[:, lay_f[spec.flat]]
+            full = np.linalg.norm(sub, axis=0)
+            padded = np.vstack([sub, np.zeros((lin.P.shape[0], sub.shape[1]))])
+            proj = np.linalg.norm(padded - pr0.Q @ (pr0.Q.T @ padded), axis=0)
+            ok = (full > 0) & (proj > 1e-3 * np.where(full > 0, full, 1)) & (proj > 1e-6)
+            rows_ok = spec.applies(tree)
+            if spec.unit == "joint":
+                ok &= rows_ok[tree.independent]
+            elif spec.unit in ("row", "link"):
+                ok &= rows_ok
+            if spec.id == "gear_clearance":   # only joints the weight loads to one side over a useful range
+                ok &= np.median(np.abs(tau_ind), axis=0) > 2 * BACKLASH_FLOOR * np.median(np.abs(tau_ind), axis=0).max()
+            eligible = np.flatnonzero(ok)
+            if not rows_ok.any():
+                skipped.append(f"{spec.id}: the robot has no "
+                               f"{'prismatic joint with a stated guide_overlap_m' if spec.rows == 'guided' else spec.rows + ' joint'}")
+                continue
+            if not len(eligible):
+                skipped.append(f"{spec.id}: no effect on the readings" +
+                               (" (the model has no elastic element for the masses to load)" if spec.id == "mass_scale" else
+                                " that the nuisance parameters cannot absorb"))
+                continue
+            eligible_of[spec.id] = eligible
+        return eligible_of, skipped
+
+    fold = _folds(data, K)
+    fold_of_row = np.repeat(fold[data.pose], 3)
+    eligible_of, skipped = eligibility(lin)
+    if not np.isfinite(sigma):
+        # sigma from what does not depend on the explanation judged: the held-out residual of the most flexible
+        # rival (every cause on every eligible unit at once); then identifiability is decided again at that sigma
+        say("estimating sigma from the held-out residual of the most flexible rival")
+        units = sorted({lay_f[spec_of[c].flat].start + int(u) for c, us in eligible_of.items() for u in us})
+        B = lin.E[:, units]
+        lower = {lay_f[sp.flat].start + int(u): sp.lower for sp in VOCABULARY if sp.id in eligible_of
+                 for u in eligible_of[sp.id]}
+        lb = np.array([-nom_flat[i] if lower[i] == "nominal" else float(lower[i]) for i in units])
+        sigma, k_flex = heldout_sigma(lin, B, lb, fold_of_row, len(kept), work_sigma)
+        src = (f"estimated: {len(np.unique(fold))}-fold held-out residual of the most flexible rival (every cause on "
+               f"every eligible joint, {k_flex} parameters with the nuisance, counted)")
+        warnings.append(f"sigma not stated and no repeated poses: sigma = {sigma * 1e3:.3f} mm from the held-out residual "
+                        f"of the most flexible rival; state [measurement] sigma_m (or --sigma-mm) for a verdict that "
+                        "can tell an effect outside the vocabulary")
+        kept, fixed, cond, moved = identify(sigma, kept)
+        if moved:
+            E = mm.elastic_jacobian(x_b, nominal, base=f_b)
+        lin = build(sigma)
+        eligible_of, skipped = eligibility(lin)
+    lin_sigma = [sigma]
 
     def penalty(pl: Placement) -> float:
         """Extended-BIC term 2 ln C(p, k) of a per-joint placement that picked k of its p eligible units (the
@@ -463,34 +566,45 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
             big = np.argsort(-np.abs(delta / np.where(np.isfinite(lay.prior_sigma[kept]), lay.prior_sigma[kept], 1.0)))[:4]
             log.debug("refine %s: largest nuisance steps %s; cause params %s", "+".join(key) or "none",
                       [(lay.names[kept[i]], float(delta[i])) for i in big], theta)
-        for _ in range(iterations):
-            f = mm.predict(x, params).ravel()
-            lin_k = LinearRivals((data.xyz.ravel() - f) / lin_sigma[0], lin.N, lin.P,
-                                 -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()], lin.E, reading_of_row)
-            d2, t2, _, _ = lin_k.fit(B_all, lb_all - theta, ub_all - theta, None)
-            log.debug("refine %s: chi2 %.2f before step", "+".join(key) or "none",
-                      float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()))
-            x[kept] += d2
-            theta = theta + t2
-            params = elastic(theta)
+        meas = data.xyz.ravel()
+        prior_chi2 = lambda x: float(((x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()]) ** 2).sum())
+        cost = lambda f, x: float((((meas - f) / lin_sigma[0]) ** 2).sum()) + prior_chi2(x)
         f = mm.predict(x, params).ravel()
-        chi2 = float((((data.xyz.ravel() - f) / lin_sigma[0]) ** 2).sum()) + \
-            float(((x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()]) ** 2).sum())
+        N, B, costs = lin.N, B_all, [cost(f, x)]
+        for it in range(2 * iterations):
+            if it == iterations:
+                # still falling by more than 1 % a step: the Jacobian of the calibrated point is too far from
+                # here (a cause that moves the geometry's best fit a long way); one fresh Jacobian at this point
+                if costs[-2] - costs[-1] <= max(0.01 * costs[-1], 1.0):
+                    break
+                N = mm.jacobian(x, elastic(theta), cols=kept, base=f) / lin_sigma[0]
+                B = np.column_stack([(mm.predict(x, elastic(theta + h)).ravel() - f) / (lin_sigma[0] * h[j])
+                                     for j, h in ((j, _fd_step(theta, j)) for j in range(len(theta)))]) \
+                    if len(theta) else B_all
+            lin_k = LinearRivals((meas - f) / lin_sigma[0], N, lin.P, -x[kept][fin_k()] / lay.prior_sigma[kept][fin_k()],
+                                 lin.E, reading_of_row)
+            d2, t2, _, _ = lin_k.fit(B, lb_all - theta, ub_all - theta, None)
+            # the first steps are taken whole (as before); the re-linearized ones are halved until they lower chi^2
+            for scale in ((1.0,) if it < iterations else (1.0, 0.5, 0.25, 0.125, 0.0625)):
+                x_n, theta_n = x.copy(), theta + scale * t2
+                x_n[kept] += scale * d2
+                f_n = mm.predict(x_n, elastic(theta_n)).ravel()
+                c_n = cost(f_n, x_n)
+                if c_n <= costs[-1]:
+                    break
+            log.debug("refine %s: step %d, chi2 %.2f -> %.2f", "+".join(key) or "none", it + 1, costs[-1], c_n)
+            if c_n > costs[-1] and it >= iterations:
+                break
+            x, theta, f = x_n, theta_n, f_n
+            costs.append(c_n)
+        params = elastic(theta)
+        chi2 = costs[-1]
         _refined[key] = (x, params, theta, chi2)
         return _refined[key]
 
     placed: dict[tuple, tuple] = {}
     say("fitting each cause in each placement; weighing none, singles and pairs")
     rv, singles = build_rivals(lin)
-    if not np.isfinite(sigma):
-        richest = min(rv, key=lambda e: e.chi2)
-        dof = max(n_data - richest.n_params - len(kept), 1)
-        sigma = work_sigma * float(np.sqrt(richest.chi2 / dof))
-        warnings.append(f"sigma not stated and no repeated poses: sigma = {sigma * 1e3:.3f} mm from the residual of "
-                        f"{richest.name}; state [measurement] sigma_m (or --sigma-mm) for a verdict that can say 'unexplained'")
-        lin = build(sigma)
-        lin_sigma[0] = sigma
-        rv, singles = build_rivals(lin)
     # every rival's chi^2 on the full nonlinear model (its linearization around the calibrated point can be off
     # by more than the noise when the causes move the geometry's best fit)
     say("refitting every rival on the nonlinear model")
@@ -499,8 +613,6 @@ def diagnose_tree(case, data: MarkerPositions, sigma_m: float | None = None, fol
     rv = [dataclasses.replace(e, chi2=refine(e.ids)[3]) for e in rv]
     # ---- cross-validation over poses: held-out residuals of any explanation -----------------------------------
     say(f"{K}-fold cross-validation over poses" if data.fold is None else "cross-validation over the CSV's folds")
-    fold = _folds(data, K)
-    fold_of_row = np.repeat(fold[data.pose], 3)
     _held: dict = {}
 
     def heldout_residual(ids) -> np.ndarray:

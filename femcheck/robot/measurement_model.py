@@ -26,7 +26,7 @@ import scipy.linalg
 
 from femcheck.robot.elastic import ElasticParams, equilibrium, flat_layout
 from femcheck.robot.positions import MarkerPositions
-from femcheck.robot.tree import ROW_PARAMS, STATIC_PARAMS, Geometry, RobotTree, rotation
+from femcheck.robot.tree import ROW_PARAMS, STATIC_PARAMS, Geometry, RobotTree, forward, gravity_wrenches, rotation
 
 #: relative pivot of the column-pivoted QR below which a nuisance direction counts as not identifiable
 RANK_RTOL = 1e-7
@@ -34,7 +34,7 @@ RANK_RTOL = 1e-7
 MIN_INFORMATION = 1.0
 #: finite-difference steps: angles (rad) and lengths (m); elastic flat parameters by kind
 FD_ANGLE, FD_LENGTH = 1e-7, 1e-7
-FD_ELASTIC = {"torsion": 1e-7, "tilt": 1e-7, "backlash": 1e-6, "bending": 1e-7, "mass_scale": 1e-4}
+FD_ELASTIC = {"torsion": 1e-7, "tilt": 1e-7, "backlash": 1e-6, "bending": 1e-7, "guide": 1e-7, "mass_scale": 1e-4}
 
 
 def kabsch(p: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -89,10 +89,11 @@ class NuisanceLayout:
 class MeasurementModel:
     """Predicts sensor-frame readings of ``data`` for a nuisance vector and elastic parameters (module docstring)."""
 
-    def __init__(self, tree: RobotTree, data: MarkerPositions, opts, passes: int, backlash_width: np.ndarray):
+    def __init__(self, tree: RobotTree, data: MarkerPositions, opts, passes: int, backlash_width: np.ndarray,
+                 guide_width: np.ndarray | None = None):
         self.tree, self.data, self.passes = tree, data, passes
         self.layout = NuisanceLayout.of(tree, opts)
-        self.backlash_width = backlash_width
+        self.backlash_width, self.guide_width = backlash_width, guide_width
         self.R0, self.t0 = np.eye(3), np.zeros(3)
         static_rows = np.flatnonzero(tree.has_static)
         self._static_rows = static_rows
@@ -113,14 +114,17 @@ class MeasurementModel:
                 k += 6
         return Geometry(row=row, static=static, marker=marker)
 
-    def base_positions(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None) -> np.ndarray:
+    def base_positions(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None,
+                       start: tuple | None = None) -> np.ndarray:
         d = data or self.data
-        fk = equilibrium(self.tree, d.q, self.geometry(x), params, self.passes, d.payload_kg, self.backlash_width)
+        fk = equilibrium(self.tree, d.q, self.geometry(x), params, self.passes, d.payload_kg, self.backlash_width,
+                         self.guide_width, start)
         return fk.markers[d.pose, d.marker]
 
-    def predict(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None) -> np.ndarray:
-        """(R, 3) sensor-frame positions, m."""
-        p = self.base_positions(x, params, data)
+    def predict(self, x: np.ndarray, params: ElasticParams, data: MarkerPositions | None = None,
+                start: tuple | None = None) -> np.ndarray:
+        """(R, 3) sensor-frame positions, m (``start``: see :func:`equilibrium`)."""
+        p = self.base_positions(x, params, data, start)
         R = rotation(x[:3]) @ self.R0
         return p @ R.T + self.t0 + x[3:6]
 
@@ -151,10 +155,17 @@ class MeasurementModel:
         steps = np.empty(n_flat)
         for kind, sl in lay.items():
             steps[sl] = FD_ELASTIC[kind]
+        guided = t.prismatic & np.isfinite(t.guide_overlap)
+        # every column starts from the same undeflected poses and weights: computed once
+        fk0 = forward(t, self.data.q @ t.coupling.T, self.geometry(x))
+        F0, M0 = gravity_wrenches(t, fk0, self.data.payload_kg, params.mass_scale)
+        start = (fk0, F0, M0, params.mass_scale)
         for j in range(n_flat):
+            if lay["guide"].start <= j < lay["guide"].stop and not guided[j - lay["guide"].start]:
+                continue        # no guide geometry: the column stays zero (the cause does not apply there)
             dlt = np.zeros(n_flat)
             dlt[j] = steps[j]
-            J[:, j] = (self.predict(x, params.shifted(t, dlt)).ravel() - f0) / steps[j]
+            J[:, j] = (self.predict(x, params.shifted(t, dlt), start=start).ravel() - f0) / steps[j]
         return J
 
 

@@ -1,7 +1,7 @@
 """Measured absolute marker positions (issue 23 contract): the long-form CSV, one row per pose and marker.
 
 Columns: ``pose`` (label), ``marker`` (a name defined in the case), optional ``fold`` (integer), ``q1_rad`` ..
-``qN_rad`` (the case's independent joints in order), ``x_mm``, ``y_mm``, ``z_mm`` (in the sensor frame), optional
+``qN_rad`` (the case's independent joints in order; a prismatic joint's column is ``qK_m``, metres), ``x_mm``, ``y_mm``, ``z_mm`` (in the sensor frame), optional
 ``payload_kg``. Lines starting with ``#`` are comments. A row whose x, y or z is empty or ``nan`` is an occluded
 marker: it is left out and counted (``missing``), not refused. Every marker row of a pose must repeat the pose's joint
 angles, fold and payload. Poses keep the order of their first row: that is the measurement order that a drift
@@ -52,23 +52,32 @@ class MarkerPositions:
                                new[self.pose[keep]], self.marker[keep], self.xyz[keep], 0)
 
 
-def parse_marker_csv(text: str, source: str, marker_names, n_joints: int, independent_rows=None) -> MarkerPositions:
+def q_column(k: int, prismatic: bool = False) -> str:
+    """CSV column of joint k (0-based): ``q{k+1}_rad``, or ``q{k+1}_m`` for a prismatic joint."""
+    return f"q{k + 1}_{'m' if prismatic else 'rad'}"
+
+
+def parse_marker_csv(text: str, source: str, marker_names, n_joints: int, independent_rows=None,
+                     prismatic_rows=None) -> MarkerPositions:
     """Parse the CSV text. ``independent_rows`` (n_joints,): the row indices of the independent joints when the
     tree has coupled rows; a file that gives every row's angle (q1..q_rows) is then read at those columns, and
-    the coupled rows' angles are not used (the coupling gives them)."""
+    the coupled rows' angles are not used (the coupling gives them). ``prismatic_rows`` (n_rows,) bool: rows whose
+    column is in metres (``qK_m``)."""
     lines = text.splitlines()
     first = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
     if first is None:
         raise MeasuredDataError(source, None, None, "no header row; expected pose,marker,q1_rad..,x_mm,y_mm,z_mm")
     reader = csv.reader(io.StringIO("\n".join(lines[first:])))
     header = [h.strip() for h in next(reader)]
-    qcols = [f"q{i + 1}_rad" for i in range(n_joints)]
-    given = [h for h in header if h.startswith("q") and h.endswith("_rad")]
+    rows = np.arange(n_joints) if independent_rows is None else np.asarray(independent_rows)
+    slide = np.zeros(int(rows.max()) + 1, bool) if prismatic_rows is None else np.asarray(prismatic_rows, bool)
+    qcols = [q_column(i, slide[r]) for i, r in enumerate(rows)]
+    given = [h for h in header if h.startswith("q") and (h.endswith("_rad") or h.endswith("_m"))]
     extra_q = []
-    if independent_rows is not None and len(given) > n_joints and \
-            set(given) == {f"q{i + 1}_rad" for i in range(len(given))} and len(given) > max(independent_rows):
-        extra_q = [c for c in given if c not in {f"q{r + 1}_rad" for r in independent_rows}]
-        qcols = [f"q{r + 1}_rad" for r in independent_rows]
+    if independent_rows is not None and len(given) > n_joints and len(given) > max(independent_rows) and \
+            set(given) == {q_column(i, i < len(slide) and slide[i]) for i in range(len(given))}:
+        extra_q = [c for c in given if c not in {q_column(r, slide[r]) for r in independent_rows}]
+        qcols = [q_column(r, slide[r]) for r in independent_rows]
     need = ["pose", "marker", *qcols, "x_mm", "y_mm", "z_mm"]
     if "pose" not in header and "point" in header:
         raise MeasuredDataError(source, first + 1, "pose", "required column is missing: this is a dial-readings CSV "
@@ -76,7 +85,7 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int, indepe
                                 "x_mm, y_mm, z_mm")
     for c in need:
         if c not in header:
-            extra = [h for h in header if h.startswith("q") and h.endswith("_rad")]
+            extra = given
             hint = f" (the case has {n_joints} independent joints; the file has {len(extra)} q columns)" if c in qcols else ""
             raise MeasuredDataError(source, first + 1, c, f"required column is missing{hint}")
     known = set(need) | {"fold", "payload_kg"} | set(extra_q)
@@ -144,21 +153,22 @@ def parse_marker_csv(text: str, source: str, marker_names, n_joints: int, indepe
                            np.array(r_xyz) * 1e-3, missing)
 
 
-def read_marker_csv(path, marker_names, n_joints: int, independent_rows=None) -> MarkerPositions:
+def read_marker_csv(path, marker_names, n_joints: int, independent_rows=None, prismatic_rows=None) -> MarkerPositions:
     """Read and validate a marker-position CSV (opened read-only)."""
     from femcheck.measured.csv_format import read_data_text
     text = read_data_text(path)
-    return parse_marker_csv(text, str(path), marker_names, n_joints, independent_rows)
+    return parse_marker_csv(text, str(path), marker_names, n_joints, independent_rows, prismatic_rows)
 
 
-def format_marker_csv(data: MarkerPositions, marker_names, meta: dict | None = None) -> str:
-    """CSV text of ``data`` (positions printed in mm with 4 decimals: 0.1 um)."""
+def format_marker_csv(data: MarkerPositions, marker_names, meta: dict | None = None, prismatic=None) -> str:
+    """CSV text of ``data`` (positions printed in mm with 4 decimals: 0.1 um); ``prismatic`` (n_joints,) bool:
+    joints whose column is ``qK_m``."""
     out = io.StringIO()
     for k, v in (meta or {}).items():
         out.write(f"# {k}: {v}\n")
     w = csv.writer(out, lineterminator="\n")
     n = data.q.shape[1]
-    w.writerow(["pose", "marker", *(["fold"] if data.fold is not None else []), *[f"q{i + 1}_rad" for i in range(n)],
+    w.writerow(["pose", "marker", *(["fold"] if data.fold is not None else []), *[q_column(i, prismatic is not None and prismatic[i]) for i in range(n)],
                 "x_mm", "y_mm", "z_mm", "payload_kg"])
     for r in range(data.n_readings):
         p = data.pose[r]

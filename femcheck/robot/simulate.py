@@ -113,14 +113,24 @@ def industrial_case(seed: int = 0, sigma_m: float | None = 5e-5, springs: bool =
     return _build(raw), raw
 
 
+def _guide_width(tree, q, payload_kg):
+    """The guide take-up widths the diagnosis uses on the same poses (rigid configuration)."""
+    from femcheck.robot.elastic import guide_widths
+    fk = forward(tree, q @ tree.coupling.T)
+    return guide_widths(tree, fk, gravity_wrenches(tree, fk, payload_kg)[1])
+
+
 def _build(raw):
     from femcheck.case.registry import build_case
     return build_case(raw, f"<generated {raw['meta']['name']}>")
 
 
-def random_poses(tree, n: int, rng, limit_deg: float = 100.0) -> np.ndarray:
-    """(n, n_joints) joint angles uniform in +-limit_deg (the first joint of a branch over the full turn)."""
-    return np.deg2rad(rng.uniform(-limit_deg, limit_deg, size=(n, tree.n_joints)))
+def random_poses(tree, n: int, rng, limit_deg: float = 100.0, stroke_m: float = 0.4) -> np.ndarray:
+    """(n, n_joints) joint angles uniform in +-limit_deg; prismatic joints uniform over [0, stroke_m] m."""
+    q = np.deg2rad(rng.uniform(-limit_deg, limit_deg, size=(n, tree.n_joints)))
+    slide = tree.prismatic[tree.independent]
+    q[:, slide] = rng.uniform(0.0, stroke_m, size=(n, int(slide.sum())))
+    return q
 
 
 def effect_increment(tree, effects: dict) -> np.ndarray:
@@ -128,10 +138,11 @@ def effect_increment(tree, effects: dict) -> np.ndarray:
     mass_scale: {'all': s - 1})."""
     lay = flat_layout(tree)
     inc = np.zeros(lay["mass_scale"].stop)
-    unit_rows = {"torsion": list(tree.independent), "backlash": list(tree.independent),
-                 "tilt": list(range(tree.n_rows)), "bending": list(range(tree.n_rows)), "mass_scale": [0]}
-    flat_of = {"joint_torsion_compliance": "torsion", "joint_tilt_compliance": "tilt", "gear_clearance": "backlash",
-               "link_bending_compliance": "bending", "mass_scale": "mass_scale"}
+    rows = list(range(tree.n_rows))
+    unit_rows = {"torsion": rows, "backlash": list(tree.independent), "tilt": rows, "bending": rows, "guide": rows,
+                 "mass_scale": [0]}
+    from femcheck.robot.causes import VOCABULARY
+    flat_of = {c.id: c.flat for c in VOCABULARY}
     for cid, where in effects.items():
         kind = flat_of[cid]
         for name, v in where.items():
@@ -165,7 +176,8 @@ def simulate_positions(case, n_poses: int = 200, effects: dict | None = None, fo
     marker = np.tile(np.arange(nm), n_poses)
     probe = MP("<sim>", labels, q, pay, None, pose, marker, np.zeros((pose.size, 3)))
     bw = _backlash_width(tree, probe, case.diagnosis)
-    fk = equilibrium(tree, q, g, params, passes, pay, bw)
+    gw = _guide_width(tree, q, pay)
+    fk = equilibrium(tree, q, g, params, passes, pay, bw, gw)
     p = fk.markers[pose, marker]
     foreign = foreign or {}
     if "compliant_base" in foreign:
@@ -226,9 +238,10 @@ def effect_rms(case, effects: dict, n_poses: int = 60, seed: int = 0) -> float:
     probe = MarkerPositions("<probe>", tuple(map(str, range(n_poses))), q, np.zeros(n_poses), None,
                             np.zeros(1, int), np.zeros(1, int), np.zeros((1, 3)))
     bw = _backlash_width(tree, probe, case.diagnosis)
+    gw = _guide_width(tree, q, None)
     base = ElasticParams.nominal(tree)
-    a = equilibrium(tree, q, None, base, 1, None, bw).markers
-    b = equilibrium(tree, q, None, base.shifted(tree, effect_increment(tree, effects)), 1, None, bw).markers
+    a = equilibrium(tree, q, None, base, 1, None, bw, gw).markers
+    b = equilibrium(tree, q, None, base.shifted(tree, effect_increment(tree, effects)), 1, None, bw, gw).markers
     return float(np.sqrt(np.mean((b - a) ** 2)))
 
 

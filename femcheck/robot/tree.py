@@ -1,4 +1,5 @@
-"""Kinematic trees of revolute DH rows: forward kinematics with geometric corrections and elastic deflections.
+"""Kinematic trees of revolute and prismatic DH rows: forward kinematics with geometric corrections and elastic
+deflections.
 
 A :class:`RobotTree` is the array form of a ``serial_tree`` case (rows in an order where every parent comes
 first). Everything is vectorized over the m poses; the only Python loop runs over the rows (the tree's depth
@@ -14,6 +15,11 @@ Row transform (the convention is the case's):
 with ``theta_i = q_i + offset_i + dtheta_i``, ``S_i`` the static frame, ``[tilt_i]`` the small rotation of the
 two tilt springs about the joint frame's x and y (seed 002's extended VJM), and, after the row, the rigid
 motion of the row's link tip when the link bends (Euler-Bernoulli cantilever under its tip load).
+
+A prismatic row slides instead: ``theta_i = offset_i + dtheta_i`` and ``d_i + q_i``. Its joint frame is the
+carriage, ``T_parent S_i Rz(theta_i) Tz(d_i + q_i)`` (standard; modified: ``T_parent S_i Rx(alpha_i) Tx(a_i)
+Rz(theta_i) Tz(d_i + q_i)``), and the tilt (springs and guide play of the moving stage) turns the rest of the row
+about the carriage: ``T_i = J_i [tilt_i] Tx(a_i) Rx(alpha_i)`` (standard) or ``J_i [tilt_i]`` (modified).
 """
 from __future__ import annotations
 
@@ -91,8 +97,10 @@ class RobotTree:
 
     ``parent`` (n,) row index or -1 (base); ``coupling`` (n, n_ind): q_rows = coupling @ q_ind;
     ``independent`` (n_ind,) rows that own a CSV column; ``descendant`` (n, n) D[j, b] = b is j or below j;
-    ``compliance_torsion`` (n_ind,), ``compliance_tilt`` (n, 2), ``compliance_bending`` (n,) nominal
-    (1/k, 0 = rigid); ``marker_link`` (n_mk,), ``marker_offset`` (n_mk, 3); ``payload_link`` (-1 none).
+    ``prismatic`` (n,) bool; ``compliance_torsion`` (n,) per row, along the row's joint coordinate (rad/(N m) on
+    revolute rows, m/N axial on prismatic ones): an independent row's drive spring, a coupled row's own spring (in
+    series with its coupling); ``guide_overlap`` (n,) m guide engagement at q = 0 (nan: not stated),
+    ``guide_clearance`` (n,) m nominal diametral guide clearance, ``compliance_tilt`` (n, 2), ``compliance_bending`` (n,) nominal (1/k, 0 = rigid); ``marker_link`` (n_mk,), ``marker_offset`` (n_mk, 3); ``payload_link`` (-1 none).
     """
 
     names: tuple[str, ...]
@@ -108,6 +116,9 @@ class RobotTree:
     has_static: np.ndarray        # (n,) bool: the case declares a static frame (its corrections are fitted)
     coupling: np.ndarray
     independent: np.ndarray
+    prismatic: np.ndarray
+    guide_overlap: np.ndarray
+    guide_clearance: np.ndarray
     mass: np.ndarray
     com: np.ndarray
     compliance_torsion: np.ndarray
@@ -131,6 +142,13 @@ class RobotTree:
     def n_joints(self) -> int:
         """Independent joints (CSV q columns)."""
         return len(self.independent)
+
+    @property
+    def coupled(self) -> np.ndarray:
+        """(n,) bool: rows that follow others through ``coupling`` (no CSV column)."""
+        out = np.ones(self.n_rows, bool)
+        out[self.independent] = False
+        return out
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -158,7 +176,7 @@ class RobotTree:
             if parent[i] >= 0:
                 D[parent[i]] |= D[i]
         inv = lambda k: 0.0 if k is None else 1.0 / k
-        ct = np.array([inv(J[i].stiffness_Nm_per_rad) for i in indep])
+        ct = np.array([inv(j.axial_stiffness_N_per_m if j.type == "prismatic" else j.stiffness_Nm_per_rad) for j in J])
         ctilt = np.array([[inv(k) for k in (j.tilt_stiffness_Nm_per_rad or (None, None))] for j in J])
         cb = np.array([inv(j.bending_EI_Nm2) for j in J])
         pl = -1 if case.payload is None else index[case.payload.link]
@@ -167,6 +185,9 @@ class RobotTree:
                    a=np.array([j.a_m for j in J]), alpha=np.deg2rad([j.alpha_deg for j in J]),
                    d=np.array([j.d_m for j in J]), theta_offset=np.deg2rad([j.theta_offset_deg for j in J]),
                    static=static, has_static=has_static, coupling=E, independent=indep,
+                   prismatic=np.array([j.type == "prismatic" for j in J]),
+                   guide_overlap=np.array([np.nan if j.guide_overlap_m is None else j.guide_overlap_m for j in J]),
+                   guide_clearance=np.array([j.guide_clearance_m or 0.0 for j in J]),
                    mass=np.array([j.mass_kg for j in J]), com=np.array([j.com_m for j in J], float),
                    compliance_torsion=ct, compliance_tilt=ctilt, compliance_bending=cb,
                    backlash=np.array([J[i].backlash_rad or 0.0 for i in indep]),
@@ -251,17 +272,24 @@ def forward(tree: RobotTree, q_rows: np.ndarray, geometry: Geometry | None = Non
         if tree.has_static[i]:
             dS = homogeneous(rotation(g.static[i, 3:]), g.static[i, :3])
             S = S @ dS
-        theta = q_rows[:, i] + tree.theta_offset[i] + g.row[i, 0]
+        slide = bool(tree.prismatic[i])
+        theta = tree.theta_offset[i] + g.row[i, 0] + (0.0 if slide else q_rows[:, i])
         d, a, al = tree.d[i] + g.row[i, 1], tree.a[i] + g.row[i, 2], tree.alpha[i] + g.row[i, 3]
+        theta = np.broadcast_to(theta, (m,))
         if tree.convention == "standard":
             J = (P @ S) @ _rz(theta)
         else:
             J = (P @ (S @ _screw_x(a, al))) @ _rz(theta)
+        if slide:                 # the joint frame is the carriage; the slide is done
+            J = J @ _tz(d + q_rows[:, i])
         if tilt is not None:
             rv = np.zeros((m, 3))
             rv[:, :2] = tilt[:, i]
             J = J @ homogeneous(rotation(rv), np.zeros(3))
-        T = J @ (_tz(d) @ _screw_x(a, al)) if tree.convention == "standard" else J @ _tz(d)
+        if slide:
+            T = J @ _screw_x(a, al) if tree.convention == "standard" else J
+        else:
+            T = J @ (_tz(d) @ _screw_x(a, al)) if tree.convention == "standard" else J @ _tz(d)
         tip[:, i] = T[:, :3, 3]
         if bending is not None:
             R = rotation(bending[:, i, 3:])

@@ -1,15 +1,17 @@
 """A URDF robot description as a ``serial_tree`` case document (issue 23: real robots come with a URDF).
 
 URDF (ROS, http://wiki.ros.org/urdf/XML): links with inertials, joints with an origin (xyz, rpy: roll, pitch, yaw
-about fixed x, y, z), an axis in the joint frame, types ``revolute`` | ``continuous`` | ``fixed`` (others are
-refused), and ``<mimic joint= multiplier= offset=>`` for coupled joints.
+about fixed x, y, z), an axis in the joint frame, types ``revolute`` | ``continuous`` | ``prismatic`` | ``fixed``
+(others are refused), and ``<mimic joint= multiplier= offset=>`` for coupled joints.
 
 Mapping. A revolute joint with origin T_o and axis u turns its child link by T_o Rot(u, q). With R_u a rotation
 that takes z onto u, Rot(u, q) = R_u Rz(q) R_u^T, so the joint is a ``serial_tree`` row with the standard
 convention, all DH parameters zero, and the static frame S = (accumulated fixed transforms) T_o R_u; the child
-link's frame is then the row frame times R_u^T. Fixed joints fold into the next row's static frame (and their
+link's frame is then the row frame times R_u^T. A prismatic joint moves its child by T_o Trans(u q) = S Tz(q)
+R_u^T: a prismatic row with the same static frame (the carriage frame is the row frame). Fixed joints fold into the next row's static frame (and their
 links' masses into the row that carries them). A mimic joint becomes ``coupling = {joint = multiplier}`` and its
-offset the row's theta offset. Link masses and centres of mass (``<inertial><origin xyz>``) are carried to the
+offset the row's theta offset (its d offset, m, on a prismatic row). URDF carries no guide geometry: the
+engaged length of a prismatic joint's guide at q = 0 is given per joint (``guide_overlap`` {joint: m}). Link masses and centres of mass (``<inertial><origin xyz>``) are carried to the
 row frame; masses of links fixed to the base are carried by the base and dropped.
 
 The geometry is then calibrated like any case (the static frames' 6 corrections and the rows' 4): URDF rows are
@@ -69,8 +71,9 @@ def z_onto(u: np.ndarray) -> np.ndarray:
 
 
 def urdf_document(path, markers: dict[str, tuple[str, tuple[float, float, float]]], root: str | None = None,
-                  name: str | None = None) -> dict:
-    """The ``serial_tree`` document of the URDF at ``path``; ``markers`` {name: (link, offset in the link frame)}."""
+                  name: str | None = None, guide_overlap: dict[str, float] | None = None) -> dict:
+    """The ``serial_tree`` document of the URDF at ``path``; ``markers`` {name: (link, offset in the link frame)};
+    ``guide_overlap`` {prismatic joint: guide engagement at q = 0, m}."""
     path = Path(path)
     try:
         tree = ET.parse(path)
@@ -92,8 +95,8 @@ def urdf_document(path, markers: dict[str, tuple[str, tuple[float, float, float]
     for J in robot.findall("joint"):
         jn, jt = J.get("name"), J.get("type")
         parent, child = J.find("parent").get("link"), J.find("child").get("link")
-        if jt not in ("revolute", "continuous", "fixed"):
-            raise CaseError(path, f"joint {jn}", f"type {jt!r}; femcheck's trees take revolute, continuous and fixed joints")
+        if jt not in ("revolute", "continuous", "prismatic", "fixed"):
+            raise CaseError(path, f"joint {jn}", f"type {jt!r}; femcheck's trees take revolute, continuous, prismatic and fixed joints")
         axis = J.find("axis")
         u = _floats(axis.get("xyz"), 3, f"joint {jn}.axis.xyz", path) if axis is not None else np.array([1.0, 0.0, 0.0])
         if jt != "fixed" and np.linalg.norm(u) == 0:
@@ -126,6 +129,7 @@ def urdf_document(path, markers: dict[str, tuple[str, tuple[float, float, float]
             Ru = z_onto(j["axis"])
             S = T @ homogeneous(Ru, np.zeros(3))
             r = {"name": jn, "parent": rows[row]["name"] if row >= 0 else "base",
+                 **({"type": "prismatic"} if j["type"] == "prismatic" else {}),
                  "a_m": 0.0, "alpha_deg": 0.0, "d_m": 0.0,
                  "static_origin_m": [float(x) for x in S[:3, 3]],
                  "static_rpy_deg": [float(math.degrees(a)) for a in matrix_rpy(S[:3, :3])]}
@@ -135,7 +139,7 @@ def urdf_document(path, markers: dict[str, tuple[str, tuple[float, float, float]
 
     visit(root, -1, np.eye(4))
     if not rows:
-        raise CaseError(path, "", f"no revolute joint below link {root!r}")
+        raise CaseError(path, "", f"no revolute or prismatic joint below link {root!r}")
     for i, r in enumerate(rows):
         ms = mass.get(i, [])
         tot = sum(m for m, _ in ms)
@@ -150,7 +154,17 @@ def urdf_document(path, markers: dict[str, tuple[str, tuple[float, float, float]
             if src not in row_of_joint:
                 raise CaseError(path, f"joint {r['name']}.mimic", f"joint {src!r} is not a revolute joint of this tree")
             r["coupling"] = {src: mult}
-            r["theta_offset_deg"] = math.degrees(off)
+            if j["type"] == "prismatic":
+                r["d_m"] = off
+            else:
+                r["theta_offset_deg"] = math.degrees(off)
+    for jn, L0 in (guide_overlap or {}).items():
+        row = next((r for r in rows if r["name"] == jn), None)
+        if row is None or joints[jn]["type"] != "prismatic":
+            raise CaseError(path, f"--guide-overlap {jn}", "is not a prismatic joint of this tree")
+        if not (math.isfinite(L0) and L0 > 0):
+            raise CaseError(path, f"--guide-overlap {jn}", f"{L0}; expected a positive length in m")
+        row["guide_overlap_m"] = float(L0)
     mk = []
     for mname, (link, off) in markers.items():
         if link not in link_place:
