@@ -336,10 +336,10 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                                       f"mesh convergence: default mesh {worst:.2f} % from the fine mesh "
                                       f"{'<=' if ok else '>'} {100 * CONVERGENCE_TOL:.0f} %")
     # checks: the analytical-FE thresholds, the idealization and the mesh convergence always; drift under --check
-    if update_baseline:
+    if update_baseline and baseline_path is not None:
         update_baseline_file("analytical drift", baseline_values(av), baseline_path)
-        if fe is not None and fe_baseline_path is not None:
-            update_baseline_file("FE drift", fe_baseline_values(fe), fe_baseline_path)
+    if update_baseline and fe is not None and fe_baseline_path is not None:
+        update_baseline_file("FE drift", fe_baseline_values(fe), fe_baseline_path)
     checks.append(drift_check("analytical drift", baseline_values(av), baseline_path, ANALYTICAL_RTOL, check,
                               update_baseline))
     drift = drift_lines(baseline_values(av), baseline_path, ANALYTICAL_RTOL) if checks[-1].status == "fail" else []
