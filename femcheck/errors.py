@@ -71,3 +71,8 @@ class SingularPoseError(FemcheckError, ValueError):
         cond = "inf" if not condition < float("inf") else f"{condition:.4g}"
         super().__init__(f"pose {pose_label} is singular or too near a singularity: cond(J_h) = {cond} > {limit:g} "
                          f"(leg {leg}{': ' + detail if detail else ''}); move away from it or raise --max-condition")
+
+
+class BaselineError(FemcheckError):
+    """A regression baseline that is missing or lacks keys of the configuration being checked: bad input (exit 2),
+    never drift. The message names the file, the keys and how to make them (``--update-baseline``)."""

@@ -152,9 +152,11 @@ def test_near_singular_pose_is_answered_with_a_warning(inputs, capsys, tmp_path)
 
 @pytest.mark.parametrize("argv", [
     ["stiffness", "{d}/haptic_6psu.toml", "--point", "P3"],
-    ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--out", "{d}/run_ok"],
-    ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--out", "{d}/run_ok"],   # a rerun empties its own folder
+    # --check: an analytical-only run without it evaluates no check, which is not a PASS (exit 1)
+    ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--check", "--baseline", "{b}", "--out", "{d}/run_ok"],
+    ["verify", "{d}/haptic_6psu.toml", "--level", "none", "--check", "--baseline", "{b}", "--out", "{d}/run_ok"],   # a rerun empties its own folder
 ], ids=["stiffness", "verify", "verify_again"])
 def test_good_input_exits_0(inputs, capsys, argv):
-    assert main([a.format(d=inputs) for a in argv]) == 0
+    baseline = Path(__file__).resolve().parents[1] / "reports" / "baseline" / "analytical.json"
+    assert main([a.format(d=inputs, b=baseline) for a in argv]) == 0
     assert "Traceback" not in "".join(capsys.readouterr())

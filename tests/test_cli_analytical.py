@@ -65,7 +65,11 @@ def test_verify_check_against_committed_baseline(tmp_path):
     res = runner.invoke(get_app(), ["verify", str(REFERENCE_CASE), "--level", "none", "--out", str(tmp_path), "--check",
                                     "--baseline", str(ROOT / "reports/baseline/analytical.json")])
     assert res.exit_code == 0, res.output
-    assert "no drift" in res.output
+    lines = res.stdout.strip().splitlines()
+    assert lines[0].startswith("PASS: 1 check passed") and lines[-1] == lines[0]   # the verdict opens and closes
+    verdict = json.loads((tmp_path / "verdict.json").read_text())
+    assert verdict["checks"] == [{"name": "analytical drift", "kind": "drift", "status": "pass",
+                                  "detail": verdict["checks"][0]["detail"]}] and "none drifted" in verdict["checks"][0]["detail"]
     for name in ("report.html", "manifest.json", "simplified_vs_detailed_rigid.csv", "contributions.png"):
         assert (tmp_path / name).is_file()
     manifest = json.loads((tmp_path / "manifest.json").read_text())

@@ -52,10 +52,17 @@ def test_meshed_element_is_detected_and_shared_law_is_not(coverage):
     assert 0 < by["guideway"].min_detectable_pct < 50
 
 
-def test_shares_sum_to_100_and_covered_share_is_the_meshed_share(coverage):
+def test_shares_sum_to_100_and_covered_share_is_the_detected_share(coverage):
+    """covered_share_pct counts only what the check catches at the stated mutation; independent_share_pct what
+    the FE models on its own, caught or not. The proximal link is meshed but too small a share to move the mean
+    error past 10 % at +50 %: independent, not covered."""
     assert sum(e.share_pct for e in coverage.elements) == pytest.approx(100.0, abs=1e-6)  # energy shares sum to 1
-    meshed = sum(e.share_pct for e in coverage.elements if e.fe_source != "shared_closed_form" and e.min_detectable_pct)
-    assert coverage.covered_share_pct == pytest.approx(meshed)
+    independent = [e for e in coverage.elements if e.fe_source != "shared_closed_form"]
+    assert coverage.covered_share_pct == pytest.approx(sum(e.share_pct for e in independent if e.detected))
+    assert coverage.independent_share_pct == pytest.approx(sum(e.share_pct for e in independent))
+    prox = next(e for e in coverage.elements if e.element == "proximal_link")
+    assert prox.fe_source == "meshed" and not prox.detected
+    assert coverage.covered_share_pct <= coverage.independent_share_pct - prox.share_pct + 1e-9
     assert coverage.base_error_pct < 10.0  # the unmutated model passes the check
 
 
@@ -66,7 +73,7 @@ def test_coverage_cli_json_keys(tmp_path):
     assert main(["coverage", "cases/haptic_6psu.toml", "--points", "P0", "--mutation", "50", "--no-joint-fe",
                  "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert {"mutation_pct", "covered_share_pct", "elements"} <= set(doc)
+    assert {"mutation_pct", "covered_share_pct", "independent_share_pct", "elements"} <= set(doc)
     assert {"element", "share_pct", "fe_source", "error_change_pct", "detected", "min_detectable_pct"} <= set(doc["elements"][0])
 
 
@@ -86,6 +93,7 @@ def test_actuation_fe_makes_the_actuation_meshed_and_detected(fe_models, coverag
     # the base moves only by the pretension's transverse geometric stiffness on the guideways (P0, P5: 0.83 -> 0.91 %)
     assert res.base_passes and res.base_error_pct == pytest.approx(coverage.base_error_pct, abs=0.3)
     assert res.covered_share_pct == pytest.approx(coverage.covered_share_pct + by["actuation"].share_pct)
+    assert res.independent_share_pct == pytest.approx(coverage.independent_share_pct + by["actuation"].share_pct)
 
 
 def test_closed_loop_actuation_fe_fails_eq44_and_coverage_says_so(fe_models):
@@ -96,6 +104,9 @@ def test_closed_loop_actuation_fe_fails_eq44_and_coverage_says_so(fe_models):
     assert not res.base_passes and res.base_error_pct > 30.0          # measured 55 % (P0, coarse, +x)
     by = {e.element: e for e in res.elements}
     assert by["actuation"].fe_source == "meshed" and by["actuation"].min_detectable_pct == 0.0
+    # a base that already fails cannot tell a mutation from its own disagreement: nothing counts as caught
+    assert res.covered_share_pct == 0.0 and not any(e.detected for e in res.elements)
+    assert res.independent_share_pct > 50.0
 
 
 def test_coverage_cli_set_override():

@@ -106,3 +106,25 @@ def test_contact_fe_data_diagnosed_against_rigid_names_joint_rotation_release(ca
     released = d.released["heldout_error_before"]["overall"]
     assert before > 0.3 and after < released + 0.01, (before, after, released)
     assert not any(c["id"] == "joint_rotation_release" for c in d.released["causes"])
+
+
+def test_ball_tilt_study_cache_round_trip_and_key(case, tmp_path, monkeypatch):
+    """The ball tilt contact FE (minutes) is cached: a stored result reads back field for field, and the key
+    moves with μ and with the joint (a different ball is never served another ball's moment)."""
+    from femcheck.fe_device.joint_contact import JointTiltResult
+    from femcheck.verify.contact_joints import _load_tilt, _store_tilt, _tilt_cache_path
+    monkeypatch.setenv("FEMCHECK_CACHE", str(tmp_path))
+    r = JointTiltResult(np.array([0.5, 1.0]), np.array([10.0, 20.0]), np.array([0.005, 0.01]), np.array([1e-3, 2e-3]),
+                        0.2, 0.004, np.array([0.3, 0.9]), 39895, 137, 150.0)
+    path = _tilt_cache_path(case, 0.2)
+    assert _load_tilt(path) is None
+    _store_tilt(path, r)
+    back = _load_tilt(path)
+    for f in ("load_factors", "normal_force_N", "rotation_rad", "moment_Nm", "slip_fraction"):
+        np.testing.assert_array_equal(getattr(back, f), getattr(r, f))   # stored bit for bit
+    assert (back.friction, back.ball_radius_m, back.dofs, back.iterations) == (0.2, 0.004, 39895, 137)
+    assert _tilt_cache_path(case, 0.0) != path
+    other = case.with_params(**{"spherical_joint.ball_radius_m": 1.1 * case.spherical_joint.ball_radius_m})
+    assert _tilt_cache_path(other, 0.2) != path
+    path.write_bytes(b"not an npz")
+    assert _load_tilt(path) is None          # a corrupt entry is solved again, never trusted

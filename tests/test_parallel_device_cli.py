@@ -60,6 +60,10 @@ def test_verify_writes_tables_and_passes_check(path, tmp_path):
                                     "--check"])
     assert res.exit_code == 0, res.output
     assert "solid links" in res.output and "beam links" in res.output
+    lines = [ln for ln in res.stdout.splitlines() if ln.strip()]
+    assert lines[0].startswith("PASS: 13 checks passed") and lines[-1] == lines[0]   # 2 levels x 2 joints x 3 dirs + beam
+    verdict = json.loads((out / "verdict.json").read_text())
+    assert verdict["passed"] and {c["kind"] for c in verdict["checks"]} == {"threshold"}
     assert "PASS" in (out / "report.html").read_text() and "every point" in (out / "report.md").read_text()
     for name, bound in (("errors_detailed.csv", 2.0), ("errors_simplified.csv", 2.0), ("errors_detailed_beam.csv", 1e-6)):
         rows = (out / name).read_text().splitlines()

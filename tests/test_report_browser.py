@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import ROOT
 from femcheck.verify.render import Section, render_html
 
 VIEWPORT = (1280, 800)
@@ -85,7 +86,9 @@ def _probe(html_text: str, tmp_path) -> dict:
 @pytest.mark.slow  # ~13 s: an analytical verify run (plots) plus a browser start
 def test_verify_report_in_headless_browser(tmp_path, case):
     from femcheck.verify.run import run_verify
-    run = run_verify(case, tmp_path / "run", points=("P0", "P7"))
+    # --check against the committed baseline: a run with no evaluated check would (rightly) not be a PASS
+    run = run_verify(case, tmp_path / "run", points=("P0", "P7"), check=True,
+                     baseline_path=ROOT / "reports" / "baseline" / "analytical.json")
     out = _probe((tmp_path / "run" / "report.html").read_text(encoding="utf-8"), tmp_path)
     assert out["images"] >= 4 and out["broken"] == [], out           # contributions + 3 deflection plots, all decoded
     assert out["verdict_bottom"] is not None and out["verdict_bottom"] <= out["viewport"], out  # above the fold

@@ -10,28 +10,68 @@ from femcheck.verify.check import Check, threshold_checks
 from femcheck.verify.compute import pivot_errors, worst_errors
 from femcheck.verify.render import Section, junit_xml, render_html, render_markdown, verdict_json, verdict_section
 
-CHECKS = [Check("analytical drift", "pass", "no drift"), Check("threshold detailed/rigid +x", "fail", "12 % > 10 %"),
-          Check("FE drift", "skipped", "no --check")]
+CHECKS = [Check("analytical drift", "drift", "pass", "no drift"),
+          Check("threshold detailed/rigid +x", "threshold", "fail", "12 % > 10 %"),
+          Check("FE drift", "drift", "skipped", "drift against the baseline", reason="no --check")]
 
 
 def test_verdict_section_leads_markdown_and_html_wherever_it_is_appended():
     sections = [Section("Errors", ({"point": "P0", "+x error %": 1.0},)), verdict_section(CHECKS, [], 3.2)]
     md = render_markdown("t", "intro", sections)
     assert md.index("## Verdict") < md.index("## Errors")
-    assert "FAIL: 1 passed, 1 failed, 1 skipped; run time 3.2 s." in md
+    assert "FAIL: 1 of 2 checks failed (threshold detailed/rigid +x); worst error: none (no FE level run). Run time 3.2 s." in md
     html = render_html("t", "intro", sections)
     assert html.index('<h2 id="verdict">Verdict</h2>') < html.index(">Errors</h2>")
 
 
 def test_verdict_json_and_junit_have_one_entry_per_check():
     v = json.loads(verdict_json(CHECKS, [], 1.0))
-    assert v["passed"] is False and [c["status"] for c in v["checks"]] == ["pass", "fail", "skipped"]
+    assert v["passed"] is False and v["verdict"] == "FAIL" and v["failed_checks"] == ["threshold detailed/rigid +x"]
+    assert [c["status"] for c in v["checks"]] == ["pass", "fail", "skipped"]
+    assert [c["kind"] for c in v["checks"]] == ["drift", "threshold", "drift"]
+    # only a skipped check carries a reason
+    assert [c.get("reason") for c in v["checks"]] == [None, None, "no --check"]
     suite = ET.fromstring(junit_xml(CHECKS, 1.0))
     assert suite.get("tests") == "3" and suite.get("failures") == "1" and suite.get("skipped") == "1"
     cases = suite.findall("testcase")
     assert [c.get("name") for c in cases] == [c.name for c in CHECKS]
     assert cases[1].find("failure").get("message") == "12 % > 10 %" and cases[0].find("failure") is None
+    assert cases[2].find("skipped").get("message") == "no --check"
     assert json.loads(verdict_json(CHECKS[:1], [], 1.0))["passed"] is True
+
+
+def test_a_run_in_which_no_check_was_evaluated_is_not_a_pass():
+    """Only skipped checks (analytical only, no --check): FAIL in verdict.json, the report and JUnit."""
+    skipped = [CHECKS[2]]
+    v = json.loads(verdict_json(skipped, [], 1.0))
+    assert v["passed"] is False and v["verdict"] == "FAIL" and v["evaluated"] == 0
+    assert v["summary"].startswith("FAIL: no check was evaluated")
+    assert verdict_section(skipped, [], 1.0).note.startswith("FAIL: no check was evaluated")
+    suite = ET.fromstring(junit_xml(skipped, 1.0))
+    assert suite.get("failures") == "1"   # a CI reading only JUnit sees red too
+    assert json.loads(verdict_json([], [], 1.0))["passed"] is False
+
+
+def test_check_kind_status_and_reason_are_validated():
+    with pytest.raises(ValueError, match="kind"):
+        Check("x", "regression", "pass")
+    with pytest.raises(ValueError, match="status"):
+        Check("x", "drift", "ok")
+    with pytest.raises(ValueError, match="reason"):
+        Check("x", "drift", "skipped")                   # a skipped check must say why
+    with pytest.raises(ValueError, match="reason"):
+        Check("x", "drift", "pass", reason="no --check")  # and only a skipped one
+
+
+def test_verdict_line_names_failed_checks_and_worst_error():
+    from femcheck.verify.check import verdict
+    worst = [{"table": "detailed/released", "direction": "+x", "mean_error_pct": 187.3}]
+    v = verdict(CHECKS, worst)
+    assert v.line() == ("FAIL: 1 of 2 checks failed (threshold detailed/rigid +x); worst error: detailed/released +x "
+                        "mean 187.30 % (threshold 10 %)")
+    ok = verdict(CHECKS[:1], [{"table": "simplified/rigid", "direction": "+z", "mean_error_pct": 0.2}])
+    assert ok.passed and ok.line() == ("PASS: 1 check passed (0 skipped); worst error: simplified/rigid +z mean 0.20 % "
+                                       "(threshold 5 %)")
 
 
 def test_pivot_gives_rows_then_average_and_max():

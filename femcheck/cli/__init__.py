@@ -72,13 +72,13 @@ def progress(stage: str, total, console=None, weights=None, stderr: bool = False
 _registered = False
 
 
-def console():
-    """A rich console that does not squeeze tables when output is not a terminal."""
+def console(stderr: bool = False):
+    """A rich console (on stdout, or ``stderr``) that does not squeeze tables when output is not a terminal."""
     from rich.console import Console
     import sys as _sys
-    tty = _sys.stdout.isatty()
+    tty = (_sys.stderr if stderr else _sys.stdout).isatty()
     # in logs and pipes, long lines stay whole (grep-able); tables still fit 140 columns
-    return Console(width=None if tty else 140, soft_wrap=not tty)
+    return Console(width=None if tty else 140, soft_wrap=not tty, stderr=stderr)
 
 
 def _register_all() -> None:

@@ -73,8 +73,9 @@ VERIFY_THRESHOLD_PCT = 1e-6
 def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "default") -> None:
     """Analytical vs FE at the test points: the solid-link FE (``mesh`` level) in errors_<level>.csv / .md, the
     beam-link FE (the chain algebra, to round-off) in errors_<level>_beam.csv / .md, a summary on screen;
-    ``check``: exit 1 above the verify thresholds (solid: simplified 5 %, detailed 10 % mean per level,
-    idealization and direction; beam: 1e-6 %)."""
+    exit 1 above the verify thresholds (solid: simplified 5 %, detailed 10 % mean per level, idealization and
+    direction; beam: 1e-6 %), with or without ``check`` (a parallel device has no drift baselines); the verdict
+    opens and closes the terminal output and is written to ``verdict.json``."""
     from femcheck.parallel.verification import verify_device
     from femcheck.report.atomic import write_text_atomic
     from femcheck.report.run_folder import prepare_run_folder
@@ -91,11 +92,14 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
     con = console()
     n_models = len(levels) * 2 * len(case.loads.directions)
     from femcheck.cli import progress as progress_bar
-    with progress_bar("FE models (solid links, then beam links)", 2 * n_models, con) as bar:
+    # progress on stderr: stdout opens and closes with the verdict
+    with progress_bar("FE models (solid links, then beam links)", 2 * n_models, console(stderr=True)) as bar:
         solid = verify_device(case, labels, levels, parts="solid", mesh=mesh, progress=lambda d: bar.advance(1, d))
         beam = verify_device(case, labels, levels, progress=lambda d: bar.advance(1, d))
-    failures = []
+    from femcheck.verify.check import passed_or_failed, verdict as make_verdict
+    checks, worst = [], []
     sections = []
+    printed = []
     for level in levels:
         for res, suffix, parts in ((solid, "", "solid"), (beam, "_beam", "beam")):
             rows = [r for r in res.rows if r["level"] == level]
@@ -116,28 +120,38 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
                 bsel = [r for r in beam.rows if r["level"] == level and r["joints"] == jt and r["direction"] == d]
                 a = [r["analytical_mm"] for r in sel]
                 mean = sum(abs(r["rel_error_pct"]) for r in sel) / len(sel)
-                if mean > limit:
-                    failures.append(f"{level}/{jt} {d}: mean |error| {mean:.2f} % > {limit:g} % (solid links)")
+                worst.append({"table": f"{level}/{jt}", "direction": d, "mean_error_pct": round(mean, 3)})
+                checks.append(passed_or_failed(f"threshold {level}/{jt} {d}", "threshold", mean <= limit,
+                                               f"{level}/{jt} {d}: mean |error| {mean:.2f} % "
+                                               f"{'<=' if mean <= limit else '>'} {limit:g} % (solid links)"))
                 t.add_row(jt, d, str(len(sel)), f"{min(a):.5f}..{max(a):.5f}", f"{mean:.3f}",
                           f"{max(abs(r['rel_error_pct']) for r in sel):.3f}",
                           f"{max(abs(r['rel_error_pct']) for r in bsel):.2e}")
                 summary.append({"joints": jt, "direction": d, "points": len(sel), "mean |error| % (solid)": mean,
                                 "max |error| % (solid)": max(abs(r["rel_error_pct"]) for r in sel),
                                 "max |error| % (beam)": max(abs(r["rel_error_pct"]) for r in bsel)})
-        con.print(t)
+        printed.append(t)
         sections += _report_sections(title, summary, rows, limit)
-    if beam.max_abs_error_pct > VERIFY_THRESHOLD_PCT:
-        failures.append(f"beam-link FE vs analytical: max |error| {beam.max_abs_error_pct:.2e} % > "
-                        f"{VERIFY_THRESHOLD_PCT:g} % (the chain algebra)")
+    ok = beam.max_abs_error_pct <= VERIFY_THRESHOLD_PCT
+    checks.append(passed_or_failed("threshold beam-link FE (chain algebra)", "threshold", ok,
+                                   f"beam-link FE vs analytical: max |error| {beam.max_abs_error_pct:.2e} % "
+                                   f"{'<=' if ok else '>'} {VERIFY_THRESHOLD_PCT:g} % (the chain algebra)"))
+    worst = sorted(worst, key=lambda w: -w["mean_error_pct"])[:3]
+    v = make_verdict(checks, worst)
+    con.print(v.line(), style="bold green" if v.passed else "bold red", markup=False, highlight=False)
+    for t in printed:
+        con.print(t)
     con.print(f"solid links: each link meshed (geometry builders, P2) and condensed; beam links: the analytical "
               f"cantilevers (max |error| {beam.max_abs_error_pct:.2e} %, a check of the chain algebra); joints as "
               f"exact releases with the analytical drive and contact springs, rigid platform; max |error| with solid "
               f"links {solid.max_abs_error_pct:.3f} % over {len(solid.rows)} deflections; wrote "
               f"{4 * len(levels) + 2} files to {out} (report.html)")
-    _write_report(case, case_path, out, sections, failures, check, solid, beam, mesh)
-    if check and failures:
-        for f in failures:
-            con.print(f"[red]{f}[/]")
+    _write_report(case, case_path, out, sections, checks, worst, solid, beam, mesh)
+    for c in checks:
+        if c.status == "fail":
+            con.print(f"  [{c.kind}] {c.name}: {c.detail}", markup=False, highlight=False)
+    con.print(v.line(), style="bold green" if v.passed else "bold red", markup=False, highlight=False)
+    if not v.passed:
         raise typer.Exit(1)
 
 
@@ -151,14 +165,15 @@ def _report_sections(title, summary, rows, limit) -> list:
                     {"analytical_mm": "{:.5f}", "fe_mm": "{:.5f}", "rel_error_pct": "{:+.3f}"})]
 
 
-def _write_report(case, case_path, out, sections, failures, check, solid, beam, mesh) -> None:
-    """report.md / report.html: the verdict, then the tables of each level (:mod:`femcheck.verify.render`)."""
+def _write_report(case, case_path, out, sections, checks, worst, solid, beam, mesh) -> None:
+    """report.md / report.html: the verdict, then the tables of each level (:mod:`femcheck.verify.render`);
+    ``verdict.json``."""
     from femcheck.report.atomic import write_text_atomic
-    from femcheck.verify.render import VERDICT_TITLE, Section, render_html, render_markdown
-    verdict = ("FAIL: " + "; ".join(failures)) if failures else "PASS: every mean error within its threshold"
-    if not check:
-        verdict = "not checked (no --check): " + verdict
-    head = Section(VERDICT_TITLE, pre=f"{verdict}\nmax |error| solid links {solid.max_abs_error_pct:.3f} %, beam links "
+    from femcheck.verify.check import verdict as make_verdict
+    from femcheck.verify.render import VERDICT_TITLE, Section, render_html, render_markdown, verdict_json
+    verdict_line = make_verdict(checks, worst).line()
+    write_text_atomic(out / "verdict.json", verdict_json(checks, worst, 0.0))
+    head = Section(VERDICT_TITLE, pre=f"{verdict_line}\nmax |error| solid links {solid.max_abs_error_pct:.3f} %, beam links "
                                      f"{beam.max_abs_error_pct:.2e} % over {len(solid.rows)} deflections")
     title = f"femcheck verify — {case.meta.name}"
     intro = (f"case {case_path}: parallel device, {len(case.device.legs)} legs; FE from the case description with "

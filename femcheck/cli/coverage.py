@@ -72,8 +72,9 @@ def register(app: typer.Typer) -> None:
             t.add_row(e.element, f"{e.share_pct:.1f}", e.fe_source, f"{e.error_change_pct:+.2f}", "yes" if e.detected else "no",
                       "-" if e.min_detectable_pct is None else f"{e.min_detectable_pct:.0f}")
         con.print(t)
-        con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance can be caught by the FE "
-                  f"(base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s; joint laws on the FE side: "
+        con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance is caught by the FE at a "
+                  f"{mutation:g} % mutation; independent share: {res.independent_share_pct:.1f} % is modelled by the FE "
+                  f"on its own (base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s; joint laws on the FE side: "
                   + ", ".join(f"{j} {s}" for j, s in res.joint_laws.items()) + ")")
         if not res.base_passes:
             con.print(f"[yellow]the unmutated model already fails the check ({res.base_error_pct:.2f} % > "

@@ -17,18 +17,24 @@ Per element:
   (:mod:`femcheck.fe_device.joint_laws`; behaviour decides independent vs shared, the FE's record of what
   supplied the element names the kind of independent model);
 - ``error_change_pct``: change of the worst mean error (percentage points) caused by the mutation;
-- ``detected``: whether the verify check fails on the mutated pair;
+- ``detected``: whether the verify check fails on the mutated pair and passes on the unmutated one;
 - ``min_detectable_pct``: the smallest mutation the check catches, by linearization of the worst mean error
   in the mutation (the analytical deflection is linear in each law's compliance up to the Hertz
   linearization); ``None`` when no mutation is caught: the error does not move, or the law is shared
   (both sides move alike; the small error change left is the load protocol's, not a check of the law).
 
-``covered_share_pct`` is the summed share of the elements with a finite ``min_detectable_pct``: the
-compliance whose errors the FE can catch at all. When the unmutated model already fails the check
-(``base_passes`` false: the analytical model and the FE disagree beyond the threshold, e.g. the closed-loop
-actuation FE against eq. 44, docs/verify.md), every mutation is "detected" trivially; ``min_detectable_pct``
-is then 0 for the independently modelled elements (their errors are still caught) and the figure should be
-read together with ``base_error_pct``.
+Two shares summarize the elements:
+
+- ``covered_share_pct``: the summed share of the elements whose mutation, at the stated size, the check
+  catches (``detected``) on a law the FE does not share: what the verification actually guards at that size;
+- ``independent_share_pct``: the summed share of the elements the FE models on its own (``fe_source`` not
+  ``shared_closed_form``), caught or not: the most a larger mutation could cover.
+
+When the unmutated model already fails the check (``base_passes`` false: the analytical model and the FE
+disagree beyond the threshold, e.g. the closed-loop actuation FE against eq. 44, docs/verify.md), a mutation
+cannot be told from that disagreement: no element counts as ``detected`` and ``covered_share_pct`` is 0;
+``min_detectable_pct`` is then 0 for the independently modelled elements and the figures should be read
+together with ``base_error_pct``.
 
 Cost: one FE build (meshes and condensed super-elements) at the points; each mutation re-solves only the
 dense leg/platform algebra of :func:`femcheck.fe_device.device_model.solve_point` with the mutated case,
@@ -72,6 +78,7 @@ class ElementCoverage:
 class CoverageResult:
     mutation_pct: float
     covered_share_pct: float
+    independent_share_pct: float
     points: tuple
     mesh: str
     fe_joints: str
@@ -178,7 +185,7 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
             source = "contact_fe" if joint is not None and sources[joint] == "contact_fe" else "meshed"
         err = _worst_mean_error_pct(a1, f1)
         slope = (err - base) / mutation_pct                    # percentage points of error per % of mutation
-        detected = err > threshold
+        detected = err > threshold >= base        # a base that already fails cannot tell a mutation apart
         # a shared law moves both sides alike: what little the error moves comes from the load protocol
         # (secant vs tangent Hertz), not from a check of the law, so no mutation of it counts as caught
         if source != "shared_closed_form" and slope > 1e-9:
@@ -192,8 +199,10 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
         note(f"mutated {ELEMENT_NAMES[e]}")
         log.info("coverage %s: share %.1f %%, FE/analytical change %.3f, error %.2f -> %.2f %%", e,
                  out[-1].share_pct, ratio, base, err)
-    covered = sum(e.share_pct for e in out if e.min_detectable_pct is not None)
-    return CoverageResult(mutation_pct=float(mutation_pct), covered_share_pct=float(covered), points=points, mesh=mesh,
+    independent = [e for e in out if e.fe_source != "shared_closed_form"]
+    covered = sum(e.share_pct for e in independent if e.detected)
+    return CoverageResult(mutation_pct=float(mutation_pct), covered_share_pct=float(covered),
+                          independent_share_pct=float(sum(e.share_pct for e in independent)), points=points, mesh=mesh,
                           joint_laws=sources,
                           fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
                           base_error_pct=base, elements=tuple(out), seconds=time.perf_counter() - t0)

@@ -75,18 +75,34 @@ def has_contact_joints(fe) -> bool:
     return "detailed" in fe.levels and ("detailed", "contact", fe.directions[0]) in fe.results[fe.points[0]].cases
 
 
-def fe_baseline_values(fe) -> dict[str, float]:
-    """Baseline keys; the contact joints are keyed by where their ball slip moment came from (``contact``:
-    theory, ρ = 1, ``--no-joint-fe``; ``contact_fe_slip``: the ball tilt contact FE), and the detailed level's
-    joints by their laws (``+joint_fe``: measured by the joints' contact FE, else the closed forms)."""
-    measured = fe.friction is not None and fe.friction.tilt_slip_ratio != 1.0
-    # detailed joints with the contact-FE-measured joint laws are other numbers than with the closed forms
-    laws = "+joint_fe" if getattr(fe, "joint_laws", None) is not None and fe.joint_laws.any_measured else ""
+def fe_baseline_key(mesh: str, kind: str, level: str, joints: str, point: str, direction: str, *,
+                    slip_measured: bool, laws_measured: bool) -> str:
+    """Baseline key of one FE deflection. The contact joints are keyed by where their ball slip moment came
+    from (``contact``: theory, ρ = 1, ``--no-joint-fe``; ``contact_fe_slip``: the ball tilt contact FE), and
+    the detailed level's joints by their laws (``+joint_fe``: measured by the joints' contact FE, else the
+    closed forms): other numbers, other keys."""
+    name = ("contact_fe_slip" if joints == "contact" and slip_measured else joints) + \
+        ("+joint_fe" if level == "detailed" and laws_measured else "")
+    return f"fe/{mesh}/{kind}/{level}/{name}/{point}/{direction}/deflection_m"
 
-    def name(lvl, j):
-        return ("contact_fe_slip" if j == "contact" and measured else j) + (laws if lvl == "detailed" else "")
-    return {f"fe/{fe.mesh.level}/{fe.kind}/{lvl}/{name(lvl, j)}/{p}/{d}/deflection_m": c.deflection_m
-            for p, r in fe.results.items() for (lvl, j, d), c in r.cases.items()}
+
+def fe_baseline_values(fe) -> dict[str, float]:
+    """{baseline key (:func:`fe_baseline_key`): deflection (m)} of every FE load case of the run."""
+    measured = fe.friction is not None and fe.friction.tilt_slip_ratio != 1.0
+    laws = getattr(fe, "joint_laws", None) is not None and fe.joint_laws.any_measured
+    return {fe_baseline_key(fe.mesh.level, fe.kind, lvl, j, p, d, slip_measured=measured, laws_measured=laws):
+            c.deflection_m for p, r in fe.results.items() for (lvl, j, d), c in r.cases.items()}
+
+
+def expected_fe_baseline_keys(points, directions, levels, mesh: str, kind: str, joint_fe: bool) -> set[str]:
+    """The FE baseline keys a run will produce, known before it runs: both idealizations per level, the contact
+    joints at the detailed level; with ``joint_fe`` the detailed level has the measured joint laws and slip
+    moment (:func:`fe_baseline_key`)."""
+    from femcheck.fe_device.joints import FE_JOINTS
+    measured = joint_fe and "detailed" in levels
+    return {fe_baseline_key(mesh, kind, lvl, j, p, d, slip_measured=measured, laws_measured=measured)
+            for lvl in levels for j in FE_JOINTS if not (j == "contact" and lvl != "detailed")
+            for p in points for d in directions}
 
 
 def conditioning_rows(av: AnalyticalVerification) -> list[dict]:

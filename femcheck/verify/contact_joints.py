@@ -85,18 +85,67 @@ TILT_FORCE_N = 20.0
 TILT_RAD = 0.01
 
 
-def ball_tilt_study(case, progress=None) -> dict:
+def ball_tilt_study(case, progress=None, use_cache: bool = True) -> dict:
     """The contact FE of the ball alone under tilt, frictionless and with the case's μ (module doc, item 2).
 
-    Returns {"frictionless": JointTiltResult, "friction": JointTiltResult}.
+    Returns {"frictionless": JointTiltResult, "friction": JointTiltResult}. Each result is cached on disk
+    (:func:`_tilt_cache_path`: keyed by the joint, its materials, μ, the study's load and mesh and the source
+    of the contact FE), so a second verification of the same device reads it instead of re-solving it.
     """
     from femcheck.fe_device.joint_contact import spherical_joint_tilt
     note = progress or (lambda desc: None)
     out = {}
     for name, mu in (("frictionless", 0.0), ("friction", case.solid.spherical_joint.friction)):
-        out[name] = spherical_joint_tilt(case, TILT_FORCE_N, TILT_RAD, friction=mu, size_m=TILT_SIZE_M)
+        path = _tilt_cache_path(case, mu)
+        out[name] = _load_tilt(path) if use_cache else None
+        if out[name] is None:
+            out[name] = spherical_joint_tilt(case, TILT_FORCE_N, TILT_RAD, friction=mu, size_m=TILT_SIZE_M)
+            if use_cache:
+                _store_tilt(path, out[name])
         note(f"ball tilt contact FE, {name}")
     return out
+
+
+def _tilt_cache_path(case, mu: float):
+    """``<cache>/ball_tilt/<key>.npz``; key = the inputs of :func:`spherical_joint_tilt` and the hash of the
+    contact-FE source (any change of that code or of the joint measures it again)."""
+    import hashlib
+    import json
+    from pathlib import Path
+
+    from geometry.cache import cache_dir, code_version
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256(code_version().encode())
+    for f in [root / "fe_device" / "joint_contact.py", root / "fe" / "elasticity.py", root / "fe" / "constraints.py",
+              root / "fe" / "newton.py", root / "fe_device" / "loads.py", *sorted((root / "fe" / "contact").glob("*.py"))]:
+        h.update(f.read_bytes())
+    inputs = {"code": h.hexdigest(), "spherical_joint": repr(case.spherical_joint), "solid": repr(case.solid),
+              "mu": float(mu), "force_N": TILT_FORCE_N, "tilt_rad": TILT_RAD, "size_m": TILT_SIZE_M}
+    return cache_dir() / "ball_tilt" / (hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:32] + ".npz")
+
+
+def _load_tilt(path):
+    from femcheck.fe_device.joint_contact import JointTiltResult
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return JointTiltResult(**{f.name: (z[f.name] if z[f.name].ndim else z[f.name].item())
+                                      for f in dataclasses.fields(JointTiltResult)})
+    except Exception:  # a corrupt entry is solved again, never trusted
+        return None
+
+
+def _store_tilt(path, result) -> None:
+    import io
+
+    from femcheck.report.atomic import write_bytes_atomic
+    buf = io.BytesIO()
+    np.savez(buf, **dataclasses.asdict(result))
+    try:
+        write_bytes_atomic(path, buf.getvalue())
+    except OSError:  # a read-only cache only costs the next run the solve
+        pass
 
 
 def tilt_slip_ratio(study: dict) -> float:

@@ -21,7 +21,7 @@ from xml.sax.saxutils import quoteattr
 
 from femcheck.report import tables
 from femcheck.report.html_page import HtmlPage
-from femcheck.verify.check import Check
+from femcheck.verify.check import Check, verdict
 
 
 #: the parts of a report, in the order a reader needs them; every section belongs to one
@@ -151,24 +151,32 @@ def render_html(title: str, intro: str, sections: list[Section]) -> str:
 
 
 def verdict_section(checks: list[Check], worst: list[dict], seconds: float) -> Section:
-    """The report's first section: overall verdict, every check, the worst errors and the run time."""
-    failed = [c for c in checks if c.status == "fail"]
-    head = ("FAIL" if failed else "PASS") + f": {sum(c.status == 'pass' for c in checks)} passed, {len(failed)} failed, " \
-        f"{sum(c.status == 'skipped' for c in checks)} skipped; run time {seconds:.1f} s."
+    """The report's first section: the verdict line (:meth:`~femcheck.verify.check.Verdict.line`), every check
+    (kind, status, detail, why skipped), the worst errors and the run time."""
+    v = verdict(checks, worst)
+    head = f"{v.line()}. Run time {seconds:.1f} s."
     if worst:
         head += " Worst mean analytical-FE errors: " + "; ".join(f"{w['table']} {w['direction']} {w['mean_error_pct']:.2f} %"
                                                                for w in worst) + "."
-    rows = tuple({"check": c.name, "status": c.status, "detail": c.detail} for c in checks)
+    rows = tuple({"check": c.name, "kind": c.kind, "status": c.status, "detail": c.detail + (f" (skipped: {c.reason})"
+                                                                                             if c.reason else "")}
+                 for c in checks)
     return Section(VERDICT_TITLE, rows, note=head, first=True)
 
 
 def verdict_json(checks: list[Check], worst: list[dict], seconds: float) -> str:
-    return json.dumps({"passed": not any(c.status == "fail" for c in checks), "seconds": round(seconds, 3),
-                       "checks": [dataclasses.asdict(c) for c in checks], "worst_errors": worst}, indent=2) + "\n"
+    """``verdict.json``: the verdict (PASS/FAIL, summary line, failed checks, worst error), every check with its
+    ``kind``, ``status`` and, when skipped, ``reason``; the worst errors and the run time."""
+    return json.dumps({**verdict(checks, worst).as_json(), "seconds": round(seconds, 3),
+                       "checks": [c.as_json() for c in checks], "worst_errors": worst}, indent=2) + "\n"
 
 
 def junit_xml(checks: list[Check], seconds: float, suite: str = "femcheck verify") -> str:
-    """JUnit XML (one testcase per check) for CI systems."""
+    """JUnit XML (one testcase per check) for CI systems; a run that evaluated no check gets one failed testcase
+    saying so."""
+    if all(c.status == "skipped" for c in checks):
+        # nothing was evaluated: a CI reading only the JUnit file must not see a green suite
+        checks = list(checks) + [Check("at least one check evaluated", "threshold", "fail", verdict(checks).line())]
     n_fail = sum(c.status == "fail" for c in checks)
     n_skip = sum(c.status == "skipped" for c in checks)
     out = ['<?xml version="1.0" encoding="utf-8"?>',
@@ -179,7 +187,7 @@ def junit_xml(checks: list[Check], seconds: float, suite: str = "femcheck verify
         if c.status == "fail":
             out.append(f"{case}><failure message={quoteattr(c.detail)}/></testcase>")
         elif c.status == "skipped":
-            out.append(f"{case}><skipped message={quoteattr(c.detail)}/></testcase>")
+            out.append(f"{case}><skipped message={quoteattr(c.reason)}/></testcase>")
         else:
             out.append(f"{case}/>")
     out.append("</testsuite>")

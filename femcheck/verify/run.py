@@ -4,8 +4,10 @@ The run covers the analytical models (both levels, both joint idealizations, 9 p
 and, for the requested FE ``levels``, the device FE model (``femcheck.verify.fe``): relative-error
 tables analytical vs FE (``errors_simplified.csv`` / ``errors_detailed.csv``, column ``rel_error_pct``,
 seed 000 Tables 2-3 layout in report.md/report.html), deflection comparison plots (Figs. 9-11, 17-19),
-contributions (Fig. 23), VTU of the deformed models (first point, or every point) and a few PNGs of them. ``--check`` fails on (a) analytical
-drift, (b) FE drift against the FE baseline, (c) a mean analytical-FE error above its threshold.
+contributions (Fig. 23), VTU of the deformed models (first point, or every point) and a few PNGs of them. Every
+run applies the analytical-FE error thresholds, the contact FE's idealization check and the mesh convergence (when
+studied); ``--check`` adds the drift of the analytical and FE values against the baselines
+(:mod:`femcheck.verify.check`).
 
 Three jobs, three modules: :mod:`~femcheck.verify.compute` builds the tables as data,
 :mod:`~femcheck.verify.check` does drift and thresholds (a list of ``Check``), :mod:`~femcheck.verify.render`
@@ -30,11 +32,12 @@ from femcheck.report.atomic import write_bytes_atomic, write_text_atomic
 from femcheck.report.verify_plots import contributions_plot, deflection_plot
 from femcheck.verify.analytical import JOINTS, LEVELS, AnalyticalVerification, run_analytical
 from femcheck.verify.check import (ANALYTICAL_RTOL, ERROR_THRESHOLDS, FE_RTOL, Check, average_row,  # noqa: F401
-                                   EXPECTED_CONTACT_IDEALIZATION, drift_as_check, drift_check, followed_idealization, threshold_checks,
-                                   threshold_failures)
+                                   EXPECTED_CONTACT_IDEALIZATION, drift_check, drift_lines, followed_idealization,
+                                   passed_or_failed, require_baseline_keys, threshold_checks, threshold_failures,
+                                   update_baseline_file, verdict)
 from femcheck.verify.compute import (baseline_values, conditioning_rows, contact_section, deflection_rows,  # noqa: F401
-                                     error_rows, error_table, fe_baseline_values, fe_error_rows, has_contact_joints,
-                                     worst_errors)
+                                     error_rows, error_table, expected_fe_baseline_keys, fe_baseline_values, fe_error_rows,
+                                     has_contact_joints, worst_errors)
 from femcheck.verify.manifest import base_manifest
 from femcheck.verify.render import Section, junit_xml, render_html, render_markdown, verdict_json, verdict_section
 
@@ -54,8 +57,14 @@ class VerifyRun:
     files: tuple[str, ...]
     seconds: float
     fe: object = None               # FEVerification, or None when no FE level ran
-    failures: tuple[str, ...] = ()  # threshold and mesh-convergence failures (with --check)
+    failures: tuple[str, ...] = ()  # failed threshold, idealization and mesh-convergence checks (details)
     checks: tuple = ()
+    worst_errors: tuple = ()        # the largest mean analytical-FE errors (compute.worst_errors)
+
+    @property
+    def verdict(self):
+        """The run's :class:`~femcheck.verify.check.Verdict` (PASS only if a check was evaluated and none failed)."""
+        return verdict(self.checks, self.worst_errors)
 
 
 DETAILED_FE_NOTE = (
@@ -200,6 +209,13 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     pts = point_set(case, points)     # labels -> poses -> inverse kinematics, once for the whole run
     av = run_analytical(case, pts)
     t_analytical = time.perf_counter() - t0
+    if check and not update_baseline:
+        # a baseline without this configuration's keys is bad input, found before the FE runs (not drift)
+        if baseline_path is not None:
+            require_baseline_keys("analytical baseline", baseline_path, baseline_values(av))
+        if levels and fe_baseline_path is not None:
+            require_baseline_keys("FE baseline", fe_baseline_path, expected_fe_baseline_keys(
+                av.points, av.directions, tuple(levels), mesh, fe_kind, joint_fe))
     files: list[str] = []
 
     def put(name: str, data):
@@ -314,9 +330,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
             explain={"min_detectable_pct": "no mutation of this law is caught (the error does not move, or the FE "
                                            "reuses the law)"},
             note=f"The mutation of {coverage.mutation_pct:+g} % is caught for: {', '.join(caught) or 'none'}; not "
-                 f"caught for: {', '.join(missed) or 'none'} (column detected). The elements with a finite "
-                 f"min_detectable_pct carry {coverage.covered_share_pct:.1f} % of the detailed compliance: a larger "
-                 "error of their laws would be caught. "
+                 f"caught for: {', '.join(missed) or 'none'} (column detected). Covered share (caught at this "
+                 f"mutation): {coverage.covered_share_pct:.1f} % of the detailed compliance; modelled by the FE on its "
+                 f"own: {coverage.independent_share_pct:.1f} %. "
                  f"Each element's compliance law multiplied by {1 + coverage.mutation_pct / 100:g} where it is defined; "
                  f"analytical ({coverage.analytical_joints}) and FE ({coverage.fe_joints} joints) rerun at "
                  f"{', '.join(coverage.points)}. fe_source from behaviour: 'meshed' when the FE does not move with the "
@@ -341,25 +357,26 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         conv_info = {"point": convergence_point, "meshes": conv_mesh, "default_vs_fine_max_pct": round(worst, 4),
                      "seconds": round(time.perf_counter() - tc, 2)}
         ok = worst <= 100 * CONVERGENCE_TOL
-        conv_check = Check("mesh convergence", ("pass" if ok else "fail") if check else "skipped",
-                            f"mesh convergence: default mesh {worst:.2f} % from the fine mesh "
-                            f"{'<=' if ok else '>'} {100 * CONVERGENCE_TOL:.0f} %")
-    # checks: drift against the baselines, then the analytical-FE thresholds
-    drift = drift_check("baseline", baseline_values(av), baseline_path, ANALYTICAL_RTOL, update_baseline, check)
-    checks.append(drift_as_check("analytical drift", drift, check and not update_baseline and baseline_path is not None,
-                                    ANALYTICAL_RTOL))
+        conv_check = passed_or_failed("mesh convergence", "convergence", ok,
+                                      f"mesh convergence: default mesh {worst:.2f} % from the fine mesh "
+                                      f"{'<=' if ok else '>'} {100 * CONVERGENCE_TOL:.0f} %")
+    # checks: the analytical-FE thresholds, the idealization and the mesh convergence always; drift under --check
+    if update_baseline and baseline_path is not None:
+        update_baseline_file("analytical drift", baseline_values(av), baseline_path)
+    if update_baseline and fe is not None and fe_baseline_path is not None:
+        update_baseline_file("FE drift", fe_baseline_values(fe), fe_baseline_path)
+    checks.append(drift_check("analytical drift", baseline_values(av), baseline_path, ANALYTICAL_RTOL, check,
+                              update_baseline))
+    drift = drift_lines(baseline_values(av), baseline_path, ANALYTICAL_RTOL) if checks[-1].status == "fail" else []
     if fe is not None:
-        fe_drift = drift_check("FE baseline", fe_baseline_values(fe), fe_baseline_path, FE_RTOL, update_baseline, check)
-        checks.append(drift_as_check("FE drift", fe_drift, check and not update_baseline and fe_baseline_path is not None,
-                                        FE_RTOL))
-        drift += fe_drift
-        thresholds = threshold_checks(fe_tabs)
-        checks += thresholds if check else [dataclasses.replace(c, status="skipped", detail=c.detail + " (no --check)")
-                                            for c in thresholds]
+        checks.append(drift_check("FE drift", fe_baseline_values(fe), fe_baseline_path, FE_RTOL, check, update_baseline))
+        if checks[-1].status == "fail":
+            drift += drift_lines(fe_baseline_values(fe), fe_baseline_path, FE_RTOL)
+        checks += threshold_checks(fe_tabs)
     if conv_check is not None:
         checks.append(conv_check)
-    failures = [c.detail for c in checks if c.status == "fail" and not c.name.endswith(" drift")]
-    if check and drift:
+    failures = [c.detail for c in checks if c.status == "fail" and c.kind != "drift"]
+    if drift:
         sections.append(Section("Regression check: drifted values", pre="\n".join(drift), part="errors"))
     worst_err = worst_errors(fe_tabs)
     seconds = time.perf_counter() - t0
@@ -399,9 +416,11 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     manifest.update({"points": list(av.points), "directions": list(av.directions), "files": files + ["manifest.json"],
                      "timings_s": {"analytical": round(t_analytical, 4), "total": round(seconds, 4)},
                      "fe": fe_info,
-                     "check": {"baseline": str(baseline_path) if baseline_path else None,
+                     "check": {"drift_checked": bool(check and not update_baseline),
+                               "baseline": str(baseline_path) if baseline_path else None,
                                "fe_baseline": str(fe_baseline_path) if fe_baseline_path else None,
-                               "drift": drift, "threshold_failures": failures} if check else None})
+                               "drift": drift, "threshold_failures": failures},
+                     "verdict": verdict(checks, worst_err).as_json()})
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
     return VerifyRun(out_dir=out, analytical=av, drift=tuple(drift), files=tuple(files), seconds=seconds, fe=fe,
-                     failures=tuple(failures), checks=tuple(checks))
+                     failures=tuple(failures), checks=tuple(checks), worst_errors=tuple(worst_err))
