@@ -1,4 +1,4 @@
-"""Parametric geometry and meshes of the 6-PSU device's links and passive joints (issue 4).
+"""Parametric geometry and meshes of the 6-PSU device's links and passive joints.
 
 Each part builder is ``build(case, size=None, ...) -> PartMesh`` in its own module; :data:`PARTS` maps the
 part names of ``femcheck mesh --part`` to them. Meshes are linear tetrahedra with bodies and named

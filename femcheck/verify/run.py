@@ -235,7 +235,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     put("contributions.csv", tables.to_csv(crow))
     png = contributions_plot(shares)
     put("contributions.png", png)
-    sections.append(Section("Contributions of the compliant elements, detailed model (%, CONVENTIONS.md §7, seed 000 "
+    sections.append(Section("Contributions of the compliant elements, detailed model (%, docs/conventions.md §7, seed 000 "
                             "Fig. 23)", tuple(crow), _fmt(crow, "{:.1f}", ("element",)),
                             images=(("contributions.png", png, "contributions"),)))
     for d in av.directions:
