@@ -3,7 +3,7 @@
 Local frame: origin at the ball centre B, z = seat normal (the rail direction e in a leg), ball on top
 of the seat, nominal contact point Q = (0, 0, -R) (R = ball radius).
 
-* ``seat = "flat"``: sphere on a plane (seed 000 Sect. 3.2.2, Fig. 12; Hertz point contact, CONVENTIONS.md
+* ``seat = "flat"``: sphere on a plane (seed 000 Sect. 3.2.2, Fig. 12; Hertz point contact, docs/conventions.md
   §5): a disk of radius ``seat_radius_m`` and thickness ``seat_thickness_m`` under the ball, touching it at Q.
 * ``seat = "socket"``: a cylinder (outer radius R + c + wall) with a spherical cup of radius Rs = R + c
   (c = ``socket_clearance_m``) and depth ``socket_depth_m``, the ball resting on the cup bottom at Q. The
