@@ -94,13 +94,13 @@ def _all_commands():
 
 def _parse(args: list[str]):
     """Parse ``femcheck ARGS`` with the real click command tree, without running it; returns the leaf command."""
-    import click
     import typer
     from femcheck.cli import get_app
     cmd = typer.main.get_command(get_app())
     ctx = cmd.make_context("femcheck", list(args), resilient_parsing=False)
-    while isinstance(cmd, click.Group):
-        name, cmd, rest = cmd.resolve_command(ctx, [*ctx.protected_args, *ctx.args])
+    while hasattr(cmd, "resolve_command"):   # a group (typer may vendor its own click): descend to the leaf
+        protected = ctx._protected_args if hasattr(ctx, "_protected_args") else ctx.protected_args
+        name, cmd, rest = cmd.resolve_command(ctx, [*protected, *ctx.args])
         ctx = cmd.make_context(name, rest, parent=ctx)
     return cmd
 
