@@ -30,7 +30,9 @@ def machine() -> dict:
     except OSError:
         pass
     return {"machine": cpu, "machine_cpus": os.cpu_count(), "machine_python": platform.python_version(),
-            "machine_blas_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default")}
+            "machine_blas_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default"),
+            # 1-minute load average when the area finished: other jobs on the machine slow the figures down
+            "load_average": round(os.getloadavg()[0], 2)}
 
 
 def main(argv=None) -> int:

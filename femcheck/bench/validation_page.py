@@ -41,6 +41,23 @@ AREA_TEXT = {
                 "errors against Johnson's closed form) and a pin in a bore with 10 µm clearance (100 N, 400 N).",
     "contact_id": "Contact stiffness from natural frequencies: root finding of the bar's frequency equation and the FE "
                   "specimen's tangential identification (time, round-trip error).",
+    "diagnose": "The diagnosis of the reference device: wall time of a diagnosis weighing every candidate pair, and the "
+                "verdict rates on data inside and outside the effect vocabulary.",
+    "early_stop": "Whether the early stops of the rival pair fits are safe: stops against full fits on generated sets.",
+    "fe_contact": "The Hertz sphere-on-flat quarter model at three refinements: DOFs, times, approach and radius errors.",
+    "fe_solver": "The P2 solid cantilever at four refinements: assembly, factorization and solve times with the "
+                 "automatically chosen direct solver, AMG-preconditioned CG on the finest, tip error vs Timoshenko.",
+    "geometry": "Meshing time and element counts per part, contact-refinement methods on the spherical-joint seat, and "
+                "a check that two cold builds give the same mesh.",
+    "joints": "The passive joints' contact FE at coarse, default and fine meshes: sizes, iterations, times, memory.",
+    "monolithic_leg": "One complete leg as one contact FE model against the substructured leg.",
+    "parallel_device": "The general parallel-device model against the dedicated 6-PSU kernel on the same poses: "
+                       "throughput of the compiled and numpy paths.",
+    "serial_diagnose": "The self-weight diagnosis of serial robots: wall time on a 19-joint tree and the rates of right "
+                       "answers on generated robots.",
+    "solvers": "Every available sparse direct solver on three of femcheck's own systems: time and residual, each as a "
+               "ratio to the best.",
+    "sweep": "Analytical sweep throughput, the local-pool overhead and the FE sweep wall time.",
     "vjm": "The virtual joint method: deflection throughput and latency of the IRB 120 case, extended-VJM batch, "
            "identification and configuration selection, the HISS stiffness and weight fit.",
 }
