@@ -28,9 +28,9 @@ Meshing (deterministic: two cold builds with the same parameters give bit-identi
   repeats, but has degenerate tets). pytetwild has no seed argument, and the library links
   ``std::random_device``. So this path is reproducible only through the disk cache, and it is no longer
   the default; the structured joint also meshes 15 (default size) to 50-70 (fine size) times faster,
-  with better dihedral angles in the ball and a finer contact zone (measurements in docs/geometry.md).
+  with better dihedral angles in the ball and a finer contact zone (measured by `python -m femcheck.bench geometry`).
 * seat: a structured graded mesh (``"structured"``: rings and layers fine at Q), or pytetwild too
-  (``"sizing_field"``), or uniform (``"uniform"``); docs/geometry.md compares them.
+  (``"sizing_field"``), or uniform (``"uniform"``); `python -m femcheck.bench geometry` compares them.
 
 Regions: ``sj_ball_contact`` (master) / ``sj_seat_contact`` (slave), pair ``sj``: facets within
 ``contact_zone_radius_m`` of the z axis at the contact; ``sj_ball_link`` (coupling, reference B): ball cap

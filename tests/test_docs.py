@@ -63,6 +63,16 @@ def test_readme_and_docs_within_their_line_budgets():
     assert total <= 2000, total      # docs that teach: one page per task, no measurement history
 
 
+def test_links_and_images_of_the_docs_resolve():
+    """Every relative Markdown link or image of docs/ and the README names a file of the repository."""
+    broken = []
+    for path in DOC_FILES:
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", path.read_text(encoding="utf-8")):
+            if "://" not in target and not (path.parent / target).exists():
+                broken.append(f"{path.relative_to(ROOT)}: {target}")
+    assert not broken, broken
+
+
 # ---------------------------------------------------------------------------------------------- command lines
 def command_lines(path: Path) -> list[tuple[str, str | None]]:
     """(command line, the error line the docs show after it or None) of the fenced sh/console blocks of a
@@ -215,10 +225,21 @@ def test_product_says_nothing_of_issues_sessions_or_agents(top):
 OUTSIDE = re.compile(r"\.\./shared|shared/reference|/work/|(?<!docs/)\bCONVENTIONS\.md")
 
 
+#: a documentation page named in the product
+PAGE_REFERENCE = re.compile(r"\bdocs/[\w./-]+\.md")
+
+
+def _missing_pages(top: str) -> list[str]:
+    """Product lines naming a docs/*.md page that the repository does not have."""
+    return [hit for hit in _grep(top, PAGE_REFERENCE)
+            if any(not (ROOT / ref).is_file() for ref in PAGE_REFERENCE.findall(hit.split(": ", 1)[1]))]
+
+
 @pytest.mark.parametrize("top", PRODUCT)
 def test_product_points_nowhere_outside_the_repository(top):
-    """A user's clone has no ../shared folder: docs, messages and cases name only files of the repository."""
-    bad = _grep(top, OUTSIDE)
+    """A user's clone has no ../shared folder: docs, messages and cases name only files of the repository, and
+    every docs page they name exists."""
+    bad = _grep(top, OUTSIDE) + _missing_pages(top)
     assert not bad, f"{len(bad)} references outside the repository in {top}:\n" + "\n".join(bad[:40])
 
 
@@ -226,7 +247,7 @@ if __name__ == "__main__":
     os.chdir(ROOT)
     total = 0
     for top in PRODUCT:
-        for hit in process_word_hits(top) + _grep(top, OUTSIDE):
+        for hit in process_word_hits(top) + _grep(top, OUTSIDE) + _missing_pages(top):
             print(hit)
             total += 1
     print(f"{total} process words or outside references in the product", file=sys.stderr)
