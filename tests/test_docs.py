@@ -55,6 +55,25 @@ def test_validation_page_figures_are_the_json_figures():
                 assert cell == value.replace("|", "/"), (path.name, key)
 
 
+def test_bench_keeps_committed_figures_when_an_area_cannot_compare(tmp_path, monkeypatch):
+    """``make bench`` rewrites reports/bench/<area>.json, except for an area that could not run its comparison here
+    (calculix without ccx): the committed figures stay, so the page never loses a measurement to a machine
+    without the optional tool."""
+    import types
+    from femcheck.bench import __main__ as bench
+    (tmp_path / "reports" / "bench").mkdir(parents=True)
+    kept = tmp_path / "reports" / "bench" / "calculix.json"
+    kept.write_text('{"ccx_status": "ran"}\n')
+    areas = [types.SimpleNamespace(AREA="calculix", run=lambda: {"ccx_status": "skipped: ccx not found"}),
+             types.SimpleNamespace(AREA="vjm", run=lambda: {"batch_poses_per_s": 1.0})]
+    monkeypatch.setattr(bench, "_areas", lambda: areas)
+    monkeypatch.chdir(tmp_path)
+    assert bench.main([]) == 0
+    assert json.loads(kept.read_text()) == {"ccx_status": "ran"}
+    written = json.loads((tmp_path / "reports" / "bench" / "vjm.json").read_text())
+    assert written["batch_poses_per_s"] == 1.0 and "machine" in written and "load_average" in written
+
+
 # ---------------------------------------------------------------------------------------------- line budgets
 def test_readme_and_docs_within_their_line_budgets():
     readme = len((ROOT / "README.md").read_text(encoding="utf-8").splitlines())
