@@ -120,9 +120,7 @@ def render(figures: dict[str, dict]) -> str:
             machine += f", load average {format_value(fig['load_average'])}"
         lines += [f"## {area}", ""]
         summary = _summary(area)
-        if summary:
-            lines += [summary, ""]
-        lines += [f"Command: `python -m femcheck.bench {area}`. Machine: {machine}."
+        lines += [(summary + " " if summary else "") + f"Command: `python -m femcheck.bench {area}`. Machine: {machine}."
                   + (f" Wall time of the area: {format_value(fig['bench_wall_s'])} s." if "bench_wall_s" in fig else ""),
                   "", "| figure | value | figure | value |", "| --- | --- | --- | --- |"]
         cells = [_cell(k, v) for k, v in fig.items() if k not in MACHINE_KEYS]
