@@ -9,7 +9,7 @@ export PYVISTA_OFF_SCREEN := true
 # tiny dense BLAS calls on 2 shared cores: spinning BLAS threads cost more than they give (measured: Hertz bench 17.5 s -> 8.4 s)
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv verify test test-all bench sweep clean
+.PHONY: venv verify test test-all bench validation sweep clean
 
 venv: $(STAMP)
 
@@ -35,6 +35,10 @@ test-all: $(STAMP)
 ## Throughput and solve-time measurements -> reports/bench/<area>.json (area calculix: side by side with CalculiX when ccx is on PATH, optional)
 bench: $(STAMP)
 	$(PY) -m femcheck.bench --snapshot
+
+## docs/validation.md from the committed bench figures reports/bench/*.json (make bench also rewrites it)
+validation: $(STAMP)
+	$(PY) -m femcheck.bench.validation_page
 
 ## Example parameter sweep on the reference case (Sobol' design, detailed model) -> reports/sweep/reference/
 sweep: $(STAMP)

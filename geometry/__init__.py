@@ -1,9 +1,9 @@
-"""Parametric geometry and meshes of the 6-PSU device's links and passive joints (issue 4).
+"""Parametric geometry and meshes of the 6-PSU device's links and passive joints.
 
 Each part builder is ``build(case, size=None, ...) -> PartMesh`` in its own module; :data:`PARTS` maps the
 part names of ``femcheck mesh --part`` to them. Meshes are linear tetrahedra with bodies and named
 regions (contact master/slave facet sets, clamps, couplings with reference points, load points),
-cached on disk by parameters and code version. See docs/geometry.md.
+cached on disk by parameters and code version. See docs/fe_solver.md.
 """
 from __future__ import annotations
 

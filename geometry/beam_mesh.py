@@ -1,6 +1,6 @@
 """Line meshes with section properties, for links modelled as beams (guideway bar, link tube).
 
-Section properties follow CONVENTIONS.md §5 (local z = element axis; Iy = int x^2 dA resists bending
+Section properties follow docs/conventions.md §5 (local z = element axis; Iy = int x^2 dA resists bending
 along x): rectangle b x h: A = b h, Iy = h b^3 / 12, Ix = b h^3 / 12, Jt = a c^3 [1/3 - 0.21 (c/a)
 (1 - c^4 / (12 a^4))] (a = max, c = min; Roark); tube D/d: A = pi (D^2 - d^2) / 4,
 Ix = Iy = pi (D^4 - d^4) / 64, Jt = 2 Ix. Shear coefficients kappa: 5/6 (rectangle), 0.5 (thin tube).
@@ -56,7 +56,7 @@ class BeamMesh:
 
 def beam(start, end, section: Section, material: str, n_elements: int, x_axis=None) -> BeamMesh:
     """Line mesh of ``n_elements`` equal elements; ``x_axis`` (3,) fixes the section's local x (projected
-    normal to the axis); default: the CONVENTIONS.md §2 link frame x = (-u_y, u_x, 0)."""
+    normal to the axis); default: the docs/conventions.md §2 link frame x = (-u_y, u_x, 0)."""
     start, end = np.asarray(start, float), np.asarray(end, float)
     if n_elements < 1:
         raise ValueError(f"n_elements: got {n_elements}; expected >= 1")

@@ -1,8 +1,8 @@
 """Linear guideway: the rectangular rail bar of a prismatic leg, clamped at A_i, slider at B_i.
 
-Local frame A_i (CONVENTIONS.md §2): origin at the clamp A, z along the rail e, x radial (width b),
+Local frame A_i (docs/conventions.md §2): origin at the clamp A, z along the rail e, x radial (width b),
 y tangential (depth h). The bar spans z in [0, L] with L = s_i, the slider position (the analytical
-cantilever length, seed 000 eq. 14 / CONVENTIONS.md §5), taken at a test point by the inverse
+cantilever length, seed 000 eq. 14 / docs/conventions.md §5), taken at a test point by the inverse
 kinematics, or given. Structured mesh (exact box; analytic volume b h L).
 
 Regions: ``lg_clamp`` (z = 0, clamp, reference A), ``lg_slider`` (z = L, coupling to the slider /

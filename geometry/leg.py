@@ -1,7 +1,7 @@
 """One whole leg (chain i) of the 6-PSU device assembled at a test point P0..P8.
 
 The parts are meshed in their local frames (each cached on its own) and moved rigidly into the world
-frame U with the inverse kinematics of femcheck.kinematics.psu6 (CONVENTIONS.md §2-3):
+frame U with the inverse kinematics of femcheck.kinematics.psu6 (docs/conventions.md §2-3):
 
 * guideway: frame A_i (origin A, z = e, x radial), bar from A up to the seat bottom, i.e. length
   s_i - R_ball - seat_thickness (the slider carriage between bar end and seat is rigid: both couple to B);

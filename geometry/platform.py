@@ -1,6 +1,6 @@
 """Moving platform: a round plate carrying the six U joints and the handle (TCP).
 
-Frame P (CONVENTIONS.md §2): origin at the platform centre, C_i in the plane z = 0 at radius R_p,
+Frame P (docs/conventions.md §2): origin at the platform centre, C_i in the plane z = 0 at radius R_p,
 angles theta_p,i. The plate (radius R_p + margin, thickness t, mid-plane at z = offset) is rigid in the
 analytical model; the FE side may use it to check that assumption. Material: the guideway material
 (aluminium in the reference case). Structured mesh: disk rings extruded through the thickness.

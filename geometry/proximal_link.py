@@ -1,6 +1,6 @@
 """Proximal link: round tube (outer D, inner d) from the ball centre B_i to the U-joint centre C_i.
 
-Local frame B_i (CONVENTIONS.md §2): origin B, z = u (link axis). The tube spans z in [0, L] with
+Local frame B_i (docs/conventions.md §2): origin B, z = u (link axis). The tube spans z in [0, L] with
 L = L2 (proximal_link_length_m; a leg assembly passes the length between the joints instead).
 Structured mesh: annulus section (nodes exactly on both circles, at least 48 around, 2 layers through
 the wall) extruded along z. Analytic volume pi (D^2 - d^2) L / 4 (the polygon section is within

@@ -1,7 +1,7 @@
 """Named regions of a mesh: boundary facets selected by geometric predicates.
 
 Regions are picked after meshing from the boundary triangles (centroid position and outward normal),
-so they follow the parameters automatically. Conventions (docs/geometry.md): in a contact pair the
+so they follow the parameters automatically. Conventions (docs/fe_solver.md): in a contact pair the
 *master* is the stiffer, convex body (steel ball, steel pin) and the *slave* the softer or concave one
 (polymer seat, aluminium bore); every facet is oriented with its normal pointing out of its body.
 """

@@ -11,7 +11,7 @@ fTetWild's optimizer is not bit-reproducible between runs, and one thread does n
 1.5 mm ball with its sizing field), and two calls in one process on a uniform 1.5 mm icosphere ball gave
 3005 and 3020 nodes. pytetwild has no seed argument and the library links ``std::random_device``.
 Without the optimizer the output repeats (up to the vertex order in each tet) but has degenerate tets
-(docs/geometry.md).
+(docs/fe_solver.md).
 Reproducibility of such bodies therefore comes only from the on-disk cache (geometry.cache) keyed by the
 parameters. Structured bodies (geometry.structured) are deterministic without the cache.
 """

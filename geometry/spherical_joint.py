@@ -3,7 +3,7 @@
 Local frame: origin at the ball centre B, z = seat normal (the rail direction e in a leg), ball on top
 of the seat, nominal contact point Q = (0, 0, -R) (R = ball radius).
 
-* ``seat = "flat"``: sphere on a plane (seed 000 Sect. 3.2.2, Fig. 12; Hertz point contact, CONVENTIONS.md
+* ``seat = "flat"``: sphere on a plane (seed 000 Sect. 3.2.2, Fig. 12; Hertz point contact, docs/conventions.md
   §5): a disk of radius ``seat_radius_m`` and thickness ``seat_thickness_m`` under the ball, touching it at Q.
 * ``seat = "socket"``: a cylinder (outer radius R + c + wall) with a spherical cup of radius Rs = R + c
   (c = ``socket_clearance_m``) and depth ``socket_depth_m``, the ball resting on the cup bottom at Q. The
@@ -28,9 +28,9 @@ Meshing (deterministic: two cold builds with the same parameters give bit-identi
   repeats, but has degenerate tets). pytetwild has no seed argument, and the library links
   ``std::random_device``. So this path is reproducible only through the disk cache, and it is no longer
   the default; the structured joint also meshes 15 (default size) to 50-70 (fine size) times faster,
-  with better dihedral angles in the ball and a finer contact zone (measurements in docs/geometry.md).
+  with better dihedral angles in the ball and a finer contact zone (measured by `python -m femcheck.bench geometry`).
 * seat: a structured graded mesh (``"structured"``: rings and layers fine at Q), or pytetwild too
-  (``"sizing_field"``), or uniform (``"uniform"``); docs/geometry.md compares them.
+  (``"sizing_field"``), or uniform (``"uniform"``); `python -m femcheck.bench geometry` compares them.
 
 Regions: ``sj_ball_contact`` (master) / ``sj_seat_contact`` (slave), pair ``sj``: facets within
 ``contact_zone_radius_m`` of the z axis at the contact; ``sj_ball_link`` (coupling, reference B): ball cap

@@ -269,7 +269,7 @@ def transition_tets(tris: np.ndarray, mids: np.ndarray, lo: np.ndarray, hi: np.n
 
 #: layers of the ball shell from the core surface (t = 0) to the sphere (t = 1): prism layer ("p") or
 #: 1:2 refining transition ("r"), each with the t where it ends. Chosen for the minimum dihedral angle
-#: (about 25 deg before contact refinement) at the fewest tetrahedra (docs/geometry.md).
+#: (about 25 deg before contact refinement) at the fewest tetrahedra.
 BALL_SHELL = (("p", 0.35), ("r", 0.6), ("p", 0.8), ("r", 1.0))
 
 

@@ -1,6 +1,6 @@
 """Universal joint at C_i: a steel cross (two pins) in the bores of two aluminium yokes.
 
-Local frame = link frame B_i at C (CONVENTIONS.md §2): origin C, z = u (link axis, the link comes from
+Local frame = link frame B_i at C (docs/conventions.md §2): origin C, z = u (link axis, the link comes from
 -z), x = a1 = unit(z_P x u) (the pin axis fixed in the platform yoke), y = a2 = u x a1 (fixed in the
 link yoke). Pin a1 lies along x in the two platform-yoke arms centred at x = +-L_u/2, pin a2 along y in
 the two link-yoke arms at y = +-L_u/2; each arm is l thick (l = contact_length_m), so each pin is

@@ -1,7 +1,7 @@
 """The verify report in a real headless browser: every image loads, the verdict is visible without
 scrolling, no console error, and no table cell holds a bare format code (``.4g``, ``{:+.1f}``), ``None`` or
 ``nan``, nor an unexplained missing value (``n/a`` without a ``title``). Skipped with a reason when no Chromium is installed
-(Debian/Ubuntu: ``apt-get install chromium``; see README "Report in a browser").
+(Debian/Ubuntu: ``apt-get install chromium``; see README, optional tools).
 
 A small probe script is put into a copy of report.html (the report itself has no scripts): it records error
 events from the start (capture phase, so failed images count), and on ``load`` writes what it measured into
@@ -68,7 +68,7 @@ def _chromium() -> str | None:
 def _probe(html_text: str, tmp_path) -> dict:
     browser = _chromium()
     if browser is None:
-        pytest.skip("no Chromium on this machine (apt-get install chromium; README 'Report in a browser')")
+        pytest.skip("no Chromium on this machine (apt-get install chromium; README, optional tools)")
     page = tmp_path / "probe.html"
     page.write_text(html_text.replace("<head>", "<head>" + PROBE, 1), encoding="utf-8")
     profile = tmp_path / "profile"

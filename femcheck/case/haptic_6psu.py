@@ -1,4 +1,4 @@
-"""The 6-PSU haptic device case (seed 000 §4; conventions in shared/reference/CONVENTIONS.md).
+"""The 6-PSU haptic device case (seed 000 §4; conventions in docs/conventions.md).
 
 Each TOML table becomes one frozen dataclass; :class:`Haptic6PSUCase` holds them all. Derived
 geometric quantities (angles in rad, base points) are properties, computed from the stored
@@ -81,7 +81,7 @@ class ModelOptions:
         "rigid", doc="rigid: S/U joints carry moments (paper as published); released: ideal joints")
     beam_shear: bool = option(False, doc="add Timoshenko shear L/(kappa G A) to the lateral beam terms")
     hertz_force: Literal["own_joint_force_at_test_load"] = option(
-        "own_joint_force_at_test_load", doc="Hertz linearization force (CONVENTIONS.md §6)")
+        "own_joint_force_at_test_load", doc="Hertz linearization force (docs/conventions.md §6)")
     law_scale: LawScale = LawScale()
     leg_scale: LegScale = LegScale()
     joint_rotation_compliance_rad_per_Nm: float = quantity(

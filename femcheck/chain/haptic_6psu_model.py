@@ -203,7 +203,7 @@ def _hertz(F, p: DeviceParameters):
 
 def _check_converged(history, it):
     if it >= _FIXED_POINT_MAX_ITER - 1:
-        raise ConvergenceError("Hertz linearization fixed point (CONVENTIONS.md §6) did not converge", history)
+        raise ConvergenceError("Hertz linearization fixed point (docs/conventions.md §6) did not converge", history)
 
 
 def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str | None = None,
@@ -385,7 +385,7 @@ def _evaluate_compiled(case, model, joints, P, W, legs, params, adjust, scale) -
     if status < 0:
         raise np.linalg.LinAlgError(f"chain or platform stiffness not positive definite at pose #{-status - 1}")
     if status:
-        raise ConvergenceError(f"Hertz linearization fixed point (CONVENTIONS.md §6) did not converge at pose #{status - 1}",
+        raise ConvergenceError(f"Hertz linearization fixed point (docs/conventions.md §6) did not converge at pose #{status - 1}",
                                [], {"pose": int(status - 1)})
     S_T = np.linalg.inv(K)
     work = np.einsum("ni,ni->n", W, t)

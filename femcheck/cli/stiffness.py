@@ -74,4 +74,4 @@ def register(app: typer.Typer) -> None:
         legs = leg_geometry(case, P)
         con.print(f"Jacobian condition number (homogenized, L = R_p): {condition_number(case, legs)[0]:.3f}; "
                   f"slider positions {np.array2string(legs.slider[0]*1e3, precision=1)} mm")
-        print_contributions(con, contrib, "contributions (share of deflection energy, CONVENTIONS.md §7)")
+        print_contributions(con, contrib, "contributions (share of deflection energy, docs/conventions.md §7)")

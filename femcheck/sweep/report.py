@@ -123,7 +123,7 @@ def figures(outcome, an) -> dict[str, str]:
         ax.set_ylabel("share of deflection energy (%)")
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle("element contributions across the sweep (CONVENTIONS.md §7; mean over points and load directions)")
+    fig.suptitle("element contributions across the sweep (docs/conventions.md §7; mean over points and load directions)")
     figs["Element contributions"] = _png(fig)
 
     fig, ax = plt.subplots(figsize=(5.5, 4))
