@@ -27,7 +27,7 @@ def deflection(case, poses, wrench, model: str = "detailed", joints: str | None 
     """TCP deflection (n, 6) [dx, dy, dz, rx, ry, rz] (m, rad) under ``wrench`` (6,) or (n, 6) (N, N m).
 
     ``model``: "simplified" (guideways + proximal links) or "detailed" (+ actuation, spherical and
-    universal joints; the Hertz contacts are linearized at this wrench, CONVENTIONS.md §6).
+    universal joints; the Hertz contacts are linearized at this wrench, docs/conventions.md §6).
     ``joints``: "rigid" | "released" | None (the case's ``[model] joint_rotations``).
     """
     return evaluate(case, poses, wrench, model=model, joints=joints).twist
@@ -43,7 +43,7 @@ def stiffness(case, poses, model: str = "detailed", wrench=None, joints: str | N
 
 
 def contributions(case, poses, wrench, model: str = "detailed", joints: str | None = None) -> dict[str, np.ndarray]:
-    """Share of each element type in the TCP deflection energy (seed 000 Fig. 23; CONVENTIONS.md §7).
+    """Share of each element type in the TCP deflection energy (seed 000 Fig. 23; docs/conventions.md §7).
 
     ``c_e = sum_i W_C,i^T S_C,e,i W_C,i / (W_T^T t_T)``: non-negative, summing to 1 for every pose.
     Returns {"guideway", "actuation", "spherical_joint", "proximal_link", "universal_joint"} -> (n,) fractions.

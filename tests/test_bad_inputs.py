@@ -1,4 +1,4 @@
-"""Bad input, each in the table below (issue 16 item 5): the exit code, one line on stderr that names the
+"""Bad input, each in the table below: the exit code, one line on stderr that names the
 culprit, no traceback, the inputs unmodified, and no output left behind. Good inputs beside them exit 0.
 
 Runs ``femcheck.cli.main`` in-process (the same function the console script calls; its exit-code path
@@ -146,7 +146,7 @@ def test_near_singular_pose_is_answered_with_a_warning(inputs, capsys, tmp_path)
     rc = main(["stiffness", str(inputs / "haptic_6psu.toml"), "--point", "P0", "--max-condition", "30", "--json", str(out)])
     assert rc == 0
     doc = json.loads(out.read_text())
-    assert doc["condition_number"] == pytest.approx(3.7665, rel=1e-3)  # CONVENTIONS.md §3: 3.77 at P0
+    assert doc["condition_number"] == pytest.approx(3.7665, rel=1e-3)  # docs/conventions.md §3: 3.77 at P0
     assert len(doc["warnings"]) == 1 and "near a singularity" in doc["warnings"][0]
 
 

@@ -1,4 +1,4 @@
-"""The reliability table of ``femcheck.bench.calibration`` (issue 15 item 2) on outcomes whose calibration is known."""
+"""The reliability table of ``femcheck.bench.calibration`` on outcomes whose calibration is known."""
 import numpy as np
 import pytest
 

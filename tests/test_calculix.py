@@ -1,4 +1,4 @@
-"""CalculiX as an independent cross-check (issue 17): C3D10 decks from femcheck meshes, results read back.
+"""CalculiX as an independent cross-check: C3D10 decks from femcheck meshes, results read back.
 
 CalculiX is optional: the tests that run ``ccx`` are skipped with the module's reason where it is absent
 (Debian/Ubuntu: ``apt-get install calculix-ccx``). The mesh conversion and the parsers are tested without it.

@@ -33,7 +33,7 @@ def test_loaded_values_and_derived_geometry(case):
     assert case.guideway.material.E_Pa == 69.0e9
     assert case.spherical_joint.seat_material.name == "uhmwpe"
     assert case.base_points.shape == (6, 3)
-    # base pairs symmetric about the x axis for pair 0 (CONVENTIONS.md §2), radius R_b
+    # base pairs symmetric about the x axis for pair 0 (docs/conventions.md §2), radius R_b
     assert case.base_points[0, 1] == pytest.approx(-case.base_points[1, 1])
     assert (case.base_points[:, :2] ** 2).sum(1) == pytest.approx([case.geometry.base_radius_m**2] * 6)
 

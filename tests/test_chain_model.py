@@ -19,7 +19,7 @@ X, Y, Z = (np.eye(6)[k] * 15.0 for k in range(3))
 @pytest.mark.parametrize("joints, expected", [("rigid", (0.2662, 0.2660, 0.0661)), ("released", (0.7179, 0.7173, 0.0729))])
 def test_P0_deflections_match_reference(case, points, joints, expected):
     got = [evaluate(case, points[:1], W, joints=joints).twist[0, k] * 1e3 for k, W in enumerate((X, Y, Z))]
-    # CONVENTIONS.md quotes 4 decimals in mm: half a unit in the last place
+    # docs/conventions.md quotes 4 decimals in mm: half a unit in the last place
     assert got == pytest.approx(expected, abs=5e-5)
 
 
@@ -214,7 +214,7 @@ def test_batched_equals_one_pose_at_a_time(case, points):
 
 
 def test_hertz_linearization_is_a_fixed_point(case, points):
-    """Each spherical joint's stiffness is k_sp(F) at the force its own chain carries (CONVENTIONS.md §6)."""
+    """Each spherical joint's stiffness is k_sp(F) at the force its own chain carries (docs/conventions.md §6)."""
     r = evaluate(case, points, X, model="detailed")
     p = device_parameters(case)
     F = np.maximum(np.linalg.norm(r.chain_wrench[..., :3], axis=-1), p.F_min_sp)

@@ -25,7 +25,7 @@ def test_stiffness_json(case):
     obj = json.loads(res.output)
     K, d = np.array(obj["K"]), np.array(obj["deflection"])
     assert K.shape == (6, 6) and d.shape == (6,)
-    assert d[0] * 1e3 == pytest.approx(0.2662, abs=5e-5)      # CONVENTIONS.md reference, 4 decimals
+    assert d[0] * 1e3 == pytest.approx(0.2662, abs=5e-5)      # docs/conventions.md reference, 4 decimals
     assert sum(obj["contributions"].values()) == pytest.approx(1.0, abs=1e-12)
     assert np.allclose(K @ d, [15, 0, 0, 0, 0, 0], atol=1e-9)
 

@@ -1,5 +1,5 @@
 """Element compliances against closed forms (Timoshenko beam theory, Johnson's Hertz contact) and
-the reference element values of CONVENTIONS.md / haptic_6psu.toml."""
+the reference element values of docs/conventions.md / haptic_6psu.toml."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Verification coverage by mutation (issue 22 item 1): a meshed element's wrong law is caught, a law the
+"""Verification coverage by mutation: a meshed element's wrong law is caught, a law the
 FE reuses is not, and fe_source comes from behaviour."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The early stops of the rival pair fits (issue 15 item 7, speed) on generated sets: a stopped start must end beyond its
+"""The early stops of the rival pair fits on generated sets: a stopped start must end beyond its
 threshold when fitted to the end, and the diagnosis must not change (``femcheck.bench.early_stop``)."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The generic verdict/evidence machinery (issue 15 items 1, 2): closed forms of the chi^2 and F tails,
+"""The generic verdict/evidence machinery: closed forms of the chi^2 and F tails,
 BIC weights, the verdict rules and the ambiguity sentence."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The structured lack-of-fit test of ``femcheck.diagnose.lack_of_fit`` (issue 15 item 1): a compliance-shaped
+"""The structured lack-of-fit test of ``femcheck.diagnose.lack_of_fit``: a compliance-shaped
 residual per (point, direction) against the pure error of the same subspace."""
 import numpy as np
 import pytest

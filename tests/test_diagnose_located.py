@@ -1,4 +1,4 @@
-"""Causes with a place and causes that add what the model lacks (issue 15 item 3).
+"""Causes with a place and causes that add what the model lacks.
 
 The default suite runs the cheap checks and the issue's two-leg case (one diagnosis); the slow ones add whole-leg
 softening, random omitted scales and the FE storyline (the default storyline test is in test_diagnose_selection.py).
@@ -153,7 +153,7 @@ def test_whole_leg_softening_is_not_taken_for_one_element(case, model):
 def test_fe_device_against_the_simplified_model_names_the_missing_compliance(case):
     """The paper's storyline on FE-made data (device FE with frictional contact joints, beam parts, coarse mesh):
     the simplified model lacks the drive and the joints; the diagnosis adds them (missing_compliance) instead of a
-    stand-in on its bound (issue 15: actuation_compliance + clearance on its closing-force bound)."""
+    stand-in on its bound."""
     from femcheck.diagnose.fe_model import DeviceFEReadingModel
     from femcheck.kinematics.psu6 import POINT_LABELS
     from femcheck.verify.fe import run_fe

@@ -1,4 +1,4 @@
-"""``femcheck plan`` (issue 15 item 4): candidate poses, the separation criterion checked against a full refit, and
+"""``femcheck plan``: candidate poses, the separation criterion checked against a full refit, and
 an ambiguous pair that the plan resolves and the same number of random cube measurements does not."""
 import dataclasses
 import json

@@ -1,4 +1,4 @@
-"""Hidden-effect tests (issue 7 acceptance): the pipeline must find what was hidden in simulated data.
+"""Hidden-effect tests: the pipeline must find what was hidden in simulated data.
 
 Default suite: one seeded case per vocabulary id (random magnitude and location, with noise) plus the
 paper's storyline and the released-joints analogue. The full matrix (10 seeds per id) is marked slow and
@@ -59,11 +59,11 @@ def test_storyline_detailed_data_against_the_simplified_model(case):
     ve = simulate(case, [], seed=7, directions=FAST_DIRECTIONS)
     r = process(ve.data, case)
     d = diagnose(AnalyticalChainModel(case, "simplified", "rigid"), r)
-    # issue 15 item 3: one cause that adds the omitted elements, not two scales standing in for them
+    # one cause that adds the omitted elements, not two scales standing in for them
     assert [c.id for c in d.causes] == ["missing_compliance"] and d.verdict == "explained"
     assert not d.causes[0].on_bound
     before = d.cv_before.error_along
-    # CONVENTIONS.md §9: simplified vs detailed 38 / 38 / 73 % (x / y / z); +-5 points for the 3 um noise
+    # docs/conventions.md §9: simplified vs detailed 38 / 38 / 73 % (x / y / z); +-5 points for the 3 um noise
     assert before["x"] == pytest.approx(38.3e-2, abs=0.05) and before["z"] == pytest.approx(73.2e-2, abs=0.05)
     # "from tens of percent to below 10 %", per direction, on held-out points
     assert max(d.cv_after.error_along[a] for a in "xyz") < 0.10

@@ -1,4 +1,4 @@
-"""sigma's own uncertainty in the evidence (issue 15 item 2): the Student-t likelihood that integrates sigma^2 out of
+"""sigma's own uncertainty in the evidence: the Student-t likelihood that integrates sigma^2 out of
 its scatter estimate with nu dof, -2 ln L = (N + nu) ln(1 + chi^2 / nu) + const."""
 import numpy as np
 import pytest

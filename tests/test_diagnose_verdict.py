@@ -1,4 +1,4 @@
-"""Verdicts on data the vocabulary can and cannot express (issue 15 items 1, 5, 6).
+"""Verdicts on data the vocabulary can and cannot express.
 
 Out-of-vocabulary effects come from :mod:`femcheck.experiment.foreign` (base rocking, trial creep, load
 softening, dial shear): the diagnosis must say ``unexplained``. In-vocabulary data keep their names.

@@ -1,4 +1,4 @@
-"""Exit codes of the real console script (issue 16): 0 when everything holds, 1 for a failed check,
+"""Exit codes of the real console script: 0 when everything holds, 1 for a failed check,
 2 for bad input. Run in a subprocess so that the path the user takes (console script -> main -> sys.exit)
 is the one under test; in-process CliRunner calls would not see a lost return code."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Virtual experiment (issue 7 item 8): protocol structure, agreement with the analytical model, physics of
+"""Virtual experiment: protocol structure, agreement with the analytical model, physics of
 hidden effects, the CLI's refusal to overwrite."""
 import json
 

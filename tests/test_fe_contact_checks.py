@@ -1,4 +1,4 @@
-"""Contact verification problems against closed forms (issue 5 acceptance): patch test, friction block,
+"""Contact verification problems against closed forms: patch test, friction block,
 Hertz line and point contact, penalty independence, refinement study, ``check-solver`` CLI."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Contact joints of the detailed FE (issue 6): the frictional stick/slip law of ball-in-seat and
+"""Contact joints of the detailed FE: the frictional stick/slip law of ball-in-seat and
 pin-in-bore joints, where it sits between the two analytical idealizations, and (slow) the contact FE of
 the ball alone that measures its slip moment."""
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Device FE model, part and leg level: super-elements vs closed forms, joints/legs/platform vs the
-analytical chain, substructure vs whole-device solve (issue 6)."""
+analytical chain, substructure vs whole-device solve."""
 from __future__ import annotations
 
 import numpy as np
@@ -43,7 +43,7 @@ def test_solid_guideway_vs_cantilever_closed_form(case):
 
 
 def test_beam_legs_reproduce_the_analytical_platform_stiffness(case, beam_p0):
-    """With beam parts the FE joints/legs/platform must equal CONVENTIONS.md §4-5 K_T to round-off."""
+    """With beam parts the FE joints/legs/platform must equal docs/conventions.md §4-5 K_T to round-off."""
     m = beam_p0
     for joints in ("rigid", "released"):
         legs = condense_legs(m.K_lg, m.link.K, m.R_A, m.R_B, joint_layout("simplified", joints))

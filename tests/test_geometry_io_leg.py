@@ -101,7 +101,7 @@ def test_beam_sections_match_closed_forms(case):
     b = guideway_beam(case, 0.2, 10, A=case.base_points[1])
     assert b.length_m == pytest.approx(0.2, rel=1e-12)
     assert np.allclose(b.R.T @ b.R, np.eye(3), atol=1e-12)
-    # local x of the guideway is radial (CONVENTIONS.md §2)
+    # local x of the guideway is radial (docs/conventions.md §2)
     radial = case.base_points[1] / np.linalg.norm(case.base_points[1])
     assert np.allclose(b.R[:, 0], radial, atol=1e-12)
     lb = link_beam(case, [0, 0, 0], [0.1, 0.05, 0.15], 8)

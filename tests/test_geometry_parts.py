@@ -186,7 +186,7 @@ def _assert_identical(a, b):
 @pytest.mark.parametrize("link_direction", [(0.0, 0.0, 1.0), (0.6, 0.0, 0.8)])
 def test_two_cold_spherical_joint_builds_are_bit_identical(case, link_direction):
     # issue acceptance: two runs produce identical meshes without the cache (structured cubed-sphere ball;
-    # the former fTetWild ball differed between runs, docs/geometry.md)
+    # the former fTetWild ball differed between runs, docs/fe_solver.md)
     from geometry import spherical_joint
     a = spherical_joint.build(case, COARSE["spherical_joint"], link_direction=link_direction, use_cache=False)
     b = spherical_joint.build(case, COARSE["spherical_joint"], link_direction=link_direction, use_cache=False)

@@ -1,4 +1,4 @@
-"""Joint contact FE (issue 14): the device load the joints carry, the closed-form joint laws they are
+"""Joint contact FE: the device load the joints carry, the closed-form joint laws they are
 compared with, the named geometry errors, the joint table, and (slow) the condensed contact FE itself."""
 from __future__ import annotations
 
@@ -110,7 +110,7 @@ def test_spherical_joint_contact_fe_coarse(case, tmp_path):
 
     The FE contains the seat's bulk compression and the ball between contact and cap besides the Hertz
     approach of two half-spaces (softer), and the coarse mesh resolves the patch with few points; 25 %
-    bounds both (measured −7 % at coarse, docs/joint_fe.md)."""
+    bounds both (measured −7 % at coarse, docs/verify.md)."""
     from femcheck.cli import main
     out = tmp_path / "j.json"
     assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", "spherical", "--mesh", "coarse",
@@ -167,7 +167,7 @@ def spherical_coarse(case):
 def test_spherical_contact_fe_converges_symmetric_positive_definite(spherical_coarse):
     """Converged (true residual, no stabilising-spring force), reciprocal (Maxwell–Betti) and positive
     definite 6 x 6 tangent; eq. 1 axial secant Hertz within 25 % (seat bulk and a coarse patch: measured
-    −4 %, docs/joint_fe.md)."""
+    −4 %, docs/verify.md)."""
     model, loads, an, tol = spherical_coarse
     r = jf.solve_joint(model, loads, -1.0, penetration_tol=tol)
     assert r.residual_rel < 1e-8  # rtol 1e-9 of the solver on ‖f‖ = F_20
@@ -193,7 +193,7 @@ def test_spherical_joint_pulled_out_is_a_convergence_error(spherical_coarse):
 
 @pytest.mark.slow
 def test_universal_joint_contact_fe_converges_coarse(case, tmp_path):
-    """The cross floating in its 2c clearance seats and converges (it chattered before, issue 14); the
+    """The cross floating in its 2c clearance seats and converges (it chattered before); the
     6 x 6 tangent is symmetric and positive definite; the JSON carries the contract keys. Slow since the
     graded coarse level (238 k DOFs: about 40 s of CPU, 2–3 min wall on the loaded machine)."""
     from femcheck.cli import main
@@ -287,7 +287,7 @@ def test_exact_sphere_gap_removes_the_facet_sagitta(case):
 def test_spherical_joint_mesh_convergence_within_3_percent(case):
     """Issue 14 target: every compliance component of the ball-in-seat contact FE within 3 % over the
     coarse, default and fine levels (patch edge a / 3, a / 4.5, a / 6; max − min over the fine value).
-    Measured spread ≤ 1.5 % (docs/joint_fe.md); the bulk is the same at every level, so this is the
+    Measured spread ≤ 1.5 % (docs/verify.md); the bulk is the same at every level, so this is the
     convergence of the contact zone (≈ 6 min on the shared 2-core machine)."""
     comps = np.array([jc.check_joint(case, "spherical", lv, "P0")["fe_component_compliance"]
                       for lv in ("coarse", "default", "fine")], float)
@@ -340,7 +340,7 @@ def test_universal_levels_refine_the_bulk_and_tie_the_hub_over_its_length(case):
     through the yoke arms is 2, 1.4, 1 x the case size (measured on the meshes: pin levels inside a bore,
     arm layers), and the rigid hub ties exactly hub_half_length_m at every level (the hub ends are
     element levels). Without that, the 2 mm mesh (levels at ±1.8 mm) tied 1.8 mm only and the joint
-    came out 6–7 % softer than at 1 mm (docs/joint_fe.md)."""
+    came out 6–7 % softer than at 1 mm (docs/verify.md)."""
     from femcheck.fe_device.mesh_levels import joint_mesh_sizes
     from geometry import universal_joint
     levels = {lv: joint_mesh_sizes(case, "universal", lv) for lv in ("coarse", "default", "fine")}
@@ -368,7 +368,7 @@ def test_universal_joint_mesh_convergence_within_3_percent(case):
     """Issue 14 target for the pins in their bores: every compliance component within 3 % over the graded
     coarse, default and fine levels, which refine the contact zone (nodes crowded at the loaded lines,
     warp 0.5 / 0.75 / 0.875) and the bulk (element length along the pins and through the yoke arms 2, 1.4,
-    1 mm; hub ends exact at every level). Measured spread ≤ 2.72 % (θ_x, θ_z; docs/joint_fe.md; the three
+    1 mm; hub ends exact at every level). Measured spread ≤ 2.72 % (θ_x, θ_z; docs/verify.md; the three
     check-joints runs took 13.6 min wall at load average 7–8; this test 6.0 min, 6.8 GB peak)."""
     from femcheck.fe_device.mesh_levels import joint_mesh_sizes
     axial = [joint_mesh_sizes(case, "universal", lv).axial_m for lv in ("coarse", "default", "fine")]

@@ -1,4 +1,4 @@
-"""FE-measured joint laws in the device FE (issue 14 part 2, femcheck/fe_device/joint_laws.py).
+"""FE-measured joint laws in the device FE.
 
 Fast tests use laws sampled from known functions (their interpolation must be exact) and the coarse device FE
 at P0; the slow test measures the real laws with the joints' contact FE."""
@@ -114,7 +114,7 @@ def test_device_fe_with_closed_form_sampled_laws_reproduces_the_closed_form_fe(p
 
 def test_device_fe_moves_with_the_measured_law_not_with_the_closed_form(p0_model):
     """With a joint law 30 % more compliant the released deflection grows by about the joints' share x 30 %
-    (8.5 % + 8 % shares, CONVENTIONS.md §7: expect 3-8 %); and a mutation of the closed form
+    (8.5 % + 8 % shares, docs/conventions.md §7: expect 3-8 %); and a mutation of the closed form
     ([model.law_scale]) no longer moves the FE at all (rtol 1e-12)."""
     case = femcheck.load_case(CASE)
     laws = closed_form_laws(case)
@@ -152,7 +152,7 @@ def test_coverage_names_contact_fe_joints_and_covers_them(p0_model):
 @pytest.mark.slow
 def test_measured_laws_against_hertz_and_the_clearance(tmp_path, monkeypatch):
     """The real contact FE (coarse): the ball's eq. 1 secant over the ladder lies within 15 % of Hertz's
-    (measured −4 to −10 % over the mesh levels, docs/joint_fe.md), and the U joint's approach at the smallest
+    (measured −4 to −10 % over the mesh levels, docs/verify.md), and the U joint's approach at the smallest
     force has taken up most of the 2c radial clearance (the cross floats across it before any stiffness)."""
     from femcheck.fe_device.joint_laws import measure_joint_laws
     from femcheck.fe_device.loads import hertz_approach

@@ -1,4 +1,4 @@
-"""6-PSU inverse/forward kinematics, test points and Jacobian (CONVENTIONS.md §2-3, §8)."""
+"""6-PSU inverse/forward kinematics, test points and Jacobian (docs/conventions.md §2-3, §8)."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Measured-data CSV validation (issue 7 item 1, CONVENTIONS.md §10): errors name file, row and column;
+"""Measured-data CSV validation: errors name file, row and column;
 the input is never modified."""
 import hashlib
 

@@ -1,4 +1,4 @@
-"""No scikit-fem "Transforming over 1000 vertices/elements to C_CONTIGUOUS" warning from femcheck's meshes (issue 17).
+"""No scikit-fem "Transforming over 1000 vertices/elements to C_CONTIGUOUS" warning from femcheck's meshes.
 
 scikit-fem logs it (``skfem.mesh.mesh``, WARNING) whenever a mesh is built from arrays that are not in C order
 and have more than 1000 columns. ``make verify`` printed it from the ball's graded bisection

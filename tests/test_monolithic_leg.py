@@ -1,4 +1,4 @@
-"""Monolithic leg check (issue 14 part 4): the leg load, the placement and assembly of the bodies in the link
+"""Monolithic leg check: the leg load, the placement and assembly of the bodies in the link
 frame, and (slow) one complete leg as one contact model vs the substructured leg with the FE-measured joints."""
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def test_leg_load_is_the_most_compressed_leg(case):
                                                               / L.detailed_preload_N, rel=1e-12)
     # the link leaves the rail at tan(angle) > μ = 0.1: a flat seat normal to the rail could not hold the ball
     assert np.tan(np.radians(load.inclination_deg)) > 3 * case.solid.spherical_joint.friction
-    # the link frame: z along u, x = a1 normal to the rail z_U (CONVENTIONS.md §2); proper rotations
+    # the link frame: z along u, x = a1 normal to the rail z_U (docs/conventions.md §2); proper rotations
     assert np.allclose(load.R_B[:, 2], load.u, atol=1e-14) and abs(load.R_B[2, 0]) < 1e-14
     assert np.linalg.det(load.R_B) == pytest.approx(1.0, abs=1e-12)
 

@@ -1,4 +1,4 @@
-"""The general parallel-device model (issue 19) against closed forms and independent derivations."""
+"""The general parallel-device model against closed forms and independent derivations."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,5 +1,5 @@
 """The 6-PSU reference device written as a parallel_device case (cases/haptic_6psu_legs.toml) against the
-6-PSU kernel (issue 19 item 2): the general model gives the same numbers."""
+6-PSU kernel: the general model gives the same numbers."""
 from __future__ import annotations
 
 import numpy as np

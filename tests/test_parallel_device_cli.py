@@ -1,4 +1,4 @@
-"""`femcheck stiffness` and `femcheck map` on the two parallel_device reference cases (issue 19), in-process."""
+"""`femcheck stiffness` and `femcheck map` on the two parallel_device reference cases, in-process."""
 from __future__ import annotations
 
 import json

@@ -1,4 +1,4 @@
-"""The compiled (numba) path of the general parallel-device model against its numpy reference (issue 19 item 2):
+"""The compiled (numba) path of the general parallel-device model against its numpy reference:
 same equations, so the two agree to rounding on random poses of the three reference devices; the closed-form
 inverse kinematics (F-P-S-U, U-P-S and R-U-U legs) against the numeric one."""
 from __future__ import annotations

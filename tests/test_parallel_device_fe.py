@@ -1,4 +1,4 @@
-"""Beam FE of the parallel devices from the case description vs the general chain model (issue 19 item 3)."""
+"""Beam FE of the parallel devices from the case description vs the general chain model."""
 from __future__ import annotations
 
 import numpy as np

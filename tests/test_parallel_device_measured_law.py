@@ -1,4 +1,4 @@
-"""The ``measured_law`` joint element of parallel devices (issue 19 item 1: the FE-measured joint laws).
+"""The ``measured_law`` joint element of parallel devices.
 
 A joint's 6 x 6 compliance measured by the joint contact FE (``femcheck check-joints --json``) enters the leg at
 the joint centre in the frame of the adjacent link. Checked against the closed-form elements it can stand for,

@@ -1,4 +1,4 @@
-"""The one plugin-discovery helper and the one direction parser (issue 18 items 1-2)."""
+"""The one plugin-discovery helper and the one direction parser."""
 import numpy as np
 import pytest
 

@@ -1,4 +1,4 @@
-"""Kinematic trees, gravity and the self-weight elastics (issue 23 items 1-2): against the independent DH chain
+"""Kinematic trees, gravity and the self-weight elastics: against the independent DH chain
 code, against energy, and against femcheck's FE beam model."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Self-weight diagnosis of serial robots from absolute marker positions (issue 23 items 3-6).
+"""Self-weight diagnosis of serial robots from absolute marker positions.
 
 Generated robots (a torso with two 7-joint arms; a 6-joint industrial arm), random geometric errors (1 mm,
 0.2 deg per DH parameter), a random sensor frame, Gaussian noise, and hidden effects sized by the RMS marker

@@ -1,4 +1,4 @@
-"""Sweep results and analysis against closed forms, the reference numbers and invariants (issue 8)."""
+"""Sweep results and analysis against closed forms, the reference numbers and invariants."""
 from __future__ import annotations
 
 import dataclasses

@@ -1,4 +1,4 @@
-"""Sweep execution: local pool vs Dask LocalCluster vs in-process, interruption and --resume (issue 8)."""
+"""Sweep execution: local pool vs Dask LocalCluster vs in-process, interruption and --resume."""
 from __future__ import annotations
 
 import os

@@ -1,4 +1,4 @@
-"""Stopping a sweep (issue 16 item 3): Ctrl-C exits 130 and stops the workers, a killed parent leaves no
+"""Stopping a sweep: Ctrl-C exits 130 and stops the workers, a killed parent leaves no
 orphan worker, the stored state resumes to the table of an uninterrupted run, and --resume refuses a
 different sweep."""
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """`femcheck verify` with the device FE model: CI subset against the committed coarse baseline, the
-threshold/drift logic, and (slow) the mesh convergence and the full default run (issue 6)."""
+threshold/drift logic, and (slow) the mesh convergence and the full default run."""
 from __future__ import annotations
 
 import csv
@@ -38,7 +38,7 @@ def test_ci_subset_coarse_verify_check(tmp_path):
     assert list(rows[0]) == ["point", "direction", "joints", "analytical_mm", "fe_mm", "rel_error_pct"]
     assert len(rows) == 2 * 3 * 2  # points x directions x idealizations
     for r in rows:
-        # the simplified FE follows the matching analytical idealization (issue 6 acceptance: mean <= 5 %)
+        # the simplified FE follows the matching analytical idealization
         assert float(r["rel_error_pct"]) < 100 * ERROR_THRESHOLDS["simplified"], r  # CSV is in %, like the tables
     with open(tmp_path / "errors_detailed.csv") as fh:
         rows = list(csv.DictReader(fh))

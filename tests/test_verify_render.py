@@ -1,5 +1,5 @@
 """verify/ split: the verdict leads the report, verdict.json / junit.xml list every check, one pivot for the
-error tables, worst errors only from checked comparisons (issue 17 item 4, issue 18 item 3)."""
+error tables, worst errors only from checked comparisons."""
 import json
 import xml.etree.ElementTree as ET
 

@@ -1,5 +1,5 @@
 """Seed 001's measured-data workflow (holes -> twists -> weights -> correction, Tables 2-4) and the published
-tables it is laid out after (issue 21 item 3)."""
+tables it is laid out after."""
 import json
 
 import numpy as np

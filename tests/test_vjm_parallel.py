@@ -182,7 +182,7 @@ def test_deflection_with_paper_weights_has_the_measured_order(hiss):
 
 
 def test_no_crank_axis_placement_gives_the_seed_knee_range(hiss):
-    """Layout inference (issue 21 item 4). Eq. 1 fixes the crank direction at phi = 0 and the passive axes, but
+    """Layout inference. Eq. 1 fixes the crank direction at phi = 0 and the passive axes, but
     not where the crank axis sits: A = S e_i + (S + c) e_j + (S - h) e_k keeps r_i = S + l1 sin(phi_i1) for any
     c, h (the case has c = l1, h = 130 mm). The knee follows in closed form from the distance B -> P in the leg
     plane. Over a 1 mm grid of (c, h), refined by Nelder-Mead, no placement puts the 39 knees over TP1-TP13

@@ -1,5 +1,5 @@
 """Torsion share of the deflection (seed 002 §V): exact superposition, its limits, and the figures the docs
-quote, computed here (issue 21 item 5)."""
+quote, computed here."""
 from __future__ import annotations
 
 import dataclasses

@@ -1,4 +1,4 @@
-"""Seed 001 eqs. 10-12 weight fit on the HISS case: restarts that converge, identifiability, intervals (issue 21 item 3).
+"""Seed 001 eqs. 10-12 weight fit on the HISS case: restarts that converge, identifiability, intervals.
 
 Virtual D/F experiments (``hiss_pipeline.virtual_experiment`` loads: 13 TPs x 5 random wrenches < 10 N, < 0.5 N m)
 on the case's assumed layout. Residuals are weighted by the noise, 0.02 mm / 0.02 deg (L = 1/sigma^2).

@@ -1,4 +1,4 @@
-"""Pin in a conforming bore with clearance, femcheck and CalculiX on one mesh (issue 17, bench ``calculix``).
+"""Pin in a conforming bore with clearance, femcheck and CalculiX on one mesh.
 
 Conformal contact, the situation of the universal-joint pins (not the joint FE model itself: a standalone
 plane-strain slice). A steel pin, a tube r ∈ [R_IN, R_PIN], sits in a steel block with a bore of radius

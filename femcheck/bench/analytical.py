@@ -55,7 +55,7 @@ def run() -> dict:
             med, p99 = _latency(fn, poses)
             out[f"{key}_single_pose_latency_s"] = med
             out[f"{key}_single_pose_latency_p99_s"] = p99
-    # the headline figures of issue 2 are the paper's idealization (case default: rigid)
+    # the headline figures are the paper's idealization (case default: rigid)
     out["detailed_poses_per_s"] = out[f"detailed_{case.model.joint_rotations}_poses_per_s"]
     out["single_pose_latency_s"] = out[f"detailed_{case.model.joint_rotations}_single_pose_latency_s"]
     fn_np = lambda P: evaluate(case, P, W, model="detailed", backend="numpy")

@@ -1,4 +1,4 @@
-"""Bench ``calculix``: femcheck and CalculiX side by side on the Hertz sphere-on-flat problem (issue 17).
+"""Bench ``calculix``: femcheck and CalculiX side by side on the Hertz sphere-on-flat problem.
 
 Problem (:mod:`femcheck.fe.checks.hertz_sphere`): identical steel (E = 210 GPa, ν = 0.3), sphere R = 5 mm on a
 flat, F = 15 N and 50 N as two load steps, quarter model, against Johnson's closed form.

@@ -1,4 +1,4 @@
-"""Are the diagnosis probabilities calibrated? (issue 15 item 2): a reliability table on generated sets.
+"""Are the diagnosis probabilities calibrated? A reliability table on generated sets.
 
 Two generators of hidden truths (``--truth``):
 

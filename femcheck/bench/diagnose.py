@@ -1,5 +1,5 @@
 """Bench area ``diagnose``: speed of a diagnosis with every candidate pair, and the verdict rates on data
-inside and outside the fitted family (issue 15 items 5, 7).
+inside and outside the fitted family.
 
 Figures:
 
@@ -14,7 +14,7 @@ Figures:
 * ``diagnose_9pt_all_pairs_cpu_s``, ``diagnose_9pt_located_cpu_s``, ``plan_only_cpu_s``: the same in CPU time of
   the process (on the shared machine the wall time depends on the other jobs' load; the CPU time much less);
 * ``diagnose_9pt_located_s``, ``located_two_legs_named_right``: the same protocol with the drive 1.8x softer in
-  legs 0 and 3 (issue 15 item 3): time, and 1 if the one cause named is ``actuation_in_legs`` in legs 0 and 3;
+  legs 0 and 3: time, and 1 if the one cause named is ``actuation_in_legs`` in legs 0 and 3;
 * ``plan_wall_s``: wall time of ``femcheck plan``'s work on the timed dataset above (the diagnosis with every pair,
   then :func:`femcheck.diagnose.plan.plan_measurements`, budget 3, 120 sampled poses); ``plan_only_s`` the plan
   step alone, ``plan_candidates`` the number of candidate measurements it weighs.
@@ -45,7 +45,7 @@ def run() -> dict:
     t_all = time.perf_counter() - t0
     out = {"diagnose_9pt_all_pairs_s": round(t_all, 2), "diagnose_9pt_all_pairs_cpu_s": round(time.process_time() - c0, 2),
            "diagnose_9pt_candidates": len(d.weighing.explanations)}
-    # issue 15 item 3: two legs whose drive is 1.8x softer, same protocol: named as actuation in exactly those legs
+    # two legs whose drive is 1.8x softer, same protocol: named as actuation in exactly those legs
     rl = process(simulate(case, [("actuation_in_legs", {"leg0": 1.8, "leg3": 1.8})], seed=1).data, case)
     t0, c0 = time.perf_counter(), time.process_time()
     dl = diagnose(model, rl, with_baseline=False)

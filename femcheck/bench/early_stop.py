@@ -1,4 +1,4 @@
-"""Bench area ``early_stop``: are the early stops of the rival pair fits safe? (issue 15 item 7, speed).
+"""Bench area ``early_stop``: are the early stops of the rival pair fits safe?
 
 The all-pairs diagnosis stops a pair fit that cannot come within chi^2 ``HOPELESS`` (40) of the leader
 (:func:`femcheck.diagnose.selection.fit_rivals`, the greedy round's ``stop``): at its start when the Gauss-Newton floor

@@ -1,4 +1,4 @@
-"""Bench ``fe_contact``: the Hertz sphere-on-flat quarter model at three refinements (issue 5 ``make bench``).
+"""Bench ``fe_contact``: the Hertz sphere-on-flat quarter model at three refinements.
 
 For each refinement (coarse / default / fine = refinement factor k = 3 / 4 / 5 of one O-grid mesh family,
 P2 tets graded toward the contact; see :mod:`femcheck.fe.checks.hertz_sphere`) and both loads (15 N, 50 N as
@@ -6,7 +6,7 @@ two load steps of one solve): DOFs, core cell size (µm), mesh + assembly + pair
 and count, back-substitution + low-rank-update time, iterations per load step, signed approach and
 contact-radius errors against Hertz ((FE − Hertz)/Hertz, %), total wall time (s), and the observed order
 of convergence of the approach error between consecutive levels (cell size ∝ 1/k).
-Bench target (issue 5): default (≈ 45k DOFs) solved for both loads with |approach error| ≤ 1 % in ≤ 30 s.
+Bench target: default (≈ 45k DOFs) solved for both loads with |approach error| ≤ 1 % in ≤ 30 s.
 """
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def run() -> dict:
             out[f"{level}_iterations_{F}N"] = int(step.iterations)
             out[f"{level}_approach_error_signed_{F}N_pct"] = round(100 * e["delta_error"], 3)
             out[f"{level}_radius_error_signed_{F}N_pct"] = round(100 * e["a_error"], 3)
-            # issue 17: radius from the pressure moments (see hertz_sphere module doc)
+            # radius from the pressure moments (see hertz_sphere module doc)
             out[f"{level}_radius_fit_error_signed_{F}N_pct"] = round(100 * e["a_fit_error"], 3)
         out[f"{level}_wall_s"] = round(wall, 3)
     for F in (int(f) for f in hs.LOADS_N):

@@ -1,4 +1,4 @@
-"""The hidden-effect matrix (issue 7 acceptance): simulate the protocol with one hidden effect of random
+"""The hidden-effect matrix: simulate the protocol with one hidden effect of random
 magnitude and location (``Effect.sample_truth``) plus noise, diagnose it against the detailed ``rigid``
 model, and tabulate which cause is named (confusion matrix) and how much the held-out error drops.
 
@@ -124,7 +124,7 @@ def confusion_markdown(results: list[MatrixCase]) -> str:
     return "\n".join(lines)
 
 
-# --- data that do not come from the fitted model family (issue 15 item 5) -------------------------------------------
+# --- data that do not come from the fitted model family -------------------------------------------
 
 #: hidden effects that the device FE world can carry: they act on the force or the reading, not on an element scale
 FE_HIDDEN = ("none", "clearance", "friction_hysteresis", "sensor_misalignment")

@@ -1,4 +1,4 @@
-"""Bench ``joints``: contact FE of the passive joints (issue 14), coarse / default / fine.
+"""Bench ``joints``: contact FE of the passive joints, coarse / default / fine.
 
 Per joint and mesh level: DOFs (P2 mesh), free DOFs after constraints, retained DOFs after condensation
 (contact candidates + reference node), candidate / total contact points, condensation time (mesh,
@@ -11,7 +11,7 @@ and the spread of each component over the levels run (max − min over the fines
 0.5, 0.75, 0.875) and in the bulk (element length along the pins and through the yoke arms 2, 1.4, 1 mm,
 ``<key>_axial_size_m``; in-plane bulk 2 mm) (:func:`femcheck.fe_device.mesh_levels.joint_mesh_sizes`); ``low_rank_updates`` counts the active-set
 changes solved by a Woodbury update of the last dense factorization instead of a new one.
-Targets (issue 14): universal ≤ 120 s and spherical ≤ 60 s at the default mesh on the 2-core machine.
+Targets: universal ≤ 120 s and spherical ≤ 60 s at the default mesh on the 2-core machine.
 
 Assembly (same mesh, side by side): ``<key>_assembly_s`` the vectorized stiffness assembly
 (:func:`femcheck.fe.elasticity.assemble_stiffness`, the one every solve uses), ``<key>_assembly_skfem_s``
@@ -33,14 +33,14 @@ LEVELS = ("coarse", "default", "fine")
 
 
 #: levels per joint (both graded: the spherical fine level has 148 k DOFs, 3.5 GB; the universal fine level
-#: 426 k DOFs, ≈ 6 GB; docs/joint_fe.md)
+#: 426 k DOFs, ≈ 6 GB; docs/verify.md)
 JOINT_LEVELS = {"spherical": LEVELS, "universal": LEVELS}
 
 
 #: levels with the side-by-side skfem assembly, and with the non-MKL (CHOLMOD) rerun of the check
 ASSEMBLY_COMPARE_LEVELS = ("coarse", "default")
 #: (universal: the blockwise Schur complement with CHOLMOD back-substitutes 5,730 retained columns through a
-#: 198 k-unknown body: > 15 min on this machine, so it is measured by hand, docs/joint_fe.md, not here)
+#: 198 k-unknown body: > 15 min on this machine, so it is measured by hand, docs/verify.md, not here)
 NONMKL_LEVELS = {"spherical": ("default",), "universal": ()}
 
 

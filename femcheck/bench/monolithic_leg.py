@@ -1,5 +1,4 @@
-"""Bench ``monolithic_leg``: one complete leg as one contact FE model vs the substructured leg (issue 14
-part 4, :mod:`femcheck.fe_device.monolithic_leg`).
+"""Bench ``monolithic_leg``: one complete leg as one contact FE model vs the substructured leg.
 
 Per test point (P0, P5; the most compressed leg, coarse meshes): the leg force at the eq. 1 levels (N), the
 monolithic model's size (P2 DOFs, free DOFs, retained DOFs after condensation, contact / candidate / closed

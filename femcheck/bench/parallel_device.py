@@ -1,4 +1,4 @@
-"""Bench ``parallel_device``: the general parallel-device model (issue 19) against the 6-PSU kernel.
+"""Bench ``parallel_device``: the general parallel-device model against the 6-PSU kernel.
 
 On the same poses of the 6-PSU cube (4,000 poses, TCP shifted up to ±25 mm), the 6-PSU numba kernel on
 ``cases/haptic_6psu.toml`` and the general model on ``cases/haptic_6psu_legs.toml`` (the same device, leg by

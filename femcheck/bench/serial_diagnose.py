@@ -1,4 +1,4 @@
-"""Bench area ``serial_diagnose``: the self-weight diagnosis of serial robots (issue 23 items 6, 7).
+"""Bench area ``serial_diagnose``: the self-weight diagnosis of serial robots.
 
 Figures:
 

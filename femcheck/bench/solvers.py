@@ -1,4 +1,4 @@
-"""Bench ``solvers`` (issue 17 item 1): every available sparse direct solver on three of femcheck's own systems,
+"""Bench ``solvers``: every available sparse direct solver on three of femcheck's own systems,
 the same matrix and right-hand side for each — factorization + solve wall time and relative residual
 ‖A x − b‖/‖b‖, each also as a ratio to the best solver on that system.
 
@@ -13,7 +13,7 @@ call of the model):
 
 Solvers: ``pardiso`` (if MKL), ``cholmod`` and ``umfpack`` (cvxopt), ``mumps`` (if python-mumps), ``superlu``
 (scipy; skipped above ``SUPERLU_MAX_DOFS`` unknowns unless ``FEMCHECK_BENCH_SUPERLU=1``, because it takes
-minutes there: issue 17 measured 20–77× PARDISO at 82k). Keys: ``<system>_<solver>_s``, ``_residual``,
+minutes there: measured 20–77× PARDISO at 82k). Keys: ``<system>_<solver>_s``, ``_residual``,
 ``_time_ratio`` (to the fastest), ``<system>_dofs``, ``<system>_fastest``.
 """
 from __future__ import annotations

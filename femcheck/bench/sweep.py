@@ -1,4 +1,4 @@
-"""Bench ``sweep``: analytical sweep throughput, the local-pool overhead (issue 8) and the FE sweep wall time.
+"""Bench ``sweep``: analytical sweep throughput, the local-pool overhead and the FE sweep wall time.
 
 1. One full analytical sweep of the detailed model on the reference case: an LHS over two element
    parameters (guideway width, link outer diameter), 111,112 samples x 9 cube points = 1,000,008

@@ -254,7 +254,7 @@ class Haptic6PSUCase(CaseRecord):
                 return m
         raise KeyError(name)
 
-    # -- derived geometry (CONVENTIONS.md §2), all SI --------------------------------------------
+    # -- derived geometry (docs/conventions.md §2), all SI --------------------------------------------
     @property
     def n_chains(self) -> int:
         return 6

@@ -1,7 +1,7 @@
 """Parameters that only the solid (FE) model of the 6-PSU device needs: the optional ``[solid]`` table.
 
 The analytical model never reads these. Every field has a documented default so that a case written
-for the analytical model alone still builds meshes (geometry package, docs/geometry.md). The
+for the analytical model alone still builds meshes (geometry package, docs/fe_solver.md). The
 analytical idealizations stay explicit and selectable, so their effect can be measured:
 ``[solid.spherical_joint] seat = "flat"`` is the paper's sphere on a plane (seed 000 Sect. 3.2.2,
 Fig. 12); ``"socket"`` is a spherical cup of radius R_ball + clearance with a wall around it.

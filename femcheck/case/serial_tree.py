@@ -134,7 +134,7 @@ class SensorFrame:
 @dataclass(frozen=True)
 class DiagnosisOptions:
     """Options of the self-weight diagnosis; the prior sigmas are the stated weak Gaussian prior of the nuisance
-    parameters around their nominal values (issue 23 item 3)."""
+    parameters around their nominal values."""
 
     fixed_point_passes: int = quantity("-", default=2, doc="passes of the torque equilibrium at the deflected configuration")
     prior_length_m: float = quantity("m", default=0.01, doc="prior sigma of d, a and static-frame offsets")

@@ -1,4 +1,4 @@
-"""The ``[solver]`` table of a case file: which sparse direct solver factorizes the FE systems (issue 17).
+"""The ``[solver]`` table of a case file: which sparse direct solver factorizes the FE systems.
 
     [solver]
     linear = "cholmod"   # "auto" | "pardiso" | "cholmod" | "mumps" | "superlu"

@@ -1,5 +1,5 @@
 """Compiled (numba) fast path of the 6-PSU chain model: the same equations as
-:mod:`femcheck.chain.haptic_6psu_model` (CONVENTIONS.md §4-7), one pose at a time in machine code.
+:mod:`femcheck.chain.haptic_6psu_model` (docs/conventions.md §4-7), one pose at a time in machine code.
 
 Why a second implementation: a haptic loop runs at 1 kHz and design sweeps evaluate millions of
 poses; numpy's per-call overhead on 6x6 matrices makes the readable vectorized model ~10x too slow
@@ -376,7 +376,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
                     K0[3, j] += MG[l, 3, j] + ry * a2_ - rz * a1_
                     K0[4, j] += MG[l, 4, j] + rz * a0 - rx * a2_
                     K0[5, j] += MG[l, 5, j] + rx * a1_ - ry * a0
-        # ---- Hertz fixed point over the six spherical joints (CONVENTIONS.md §6)
+        # ---- Hertz fixed point over the six spherical joints (docs/conventions.md §6)
         for l in range(6):
             csp[l] = 0.0
             ksp[l] = np.nan

@@ -1,5 +1,5 @@
 """Compliance-chain stiffness model of the 6-PSU device, vectorized over poses
-(seed 000 §4.1, §4.4; CONVENTIONS.md §4-7, which replaces the paper's garbled eqs. 26, 49-53).
+(seed 000 §4.1, §4.4; docs/conventions.md §4-7, which replaces the paper's garbled eqs. 26, 49-53).
 
 Per chain i the elements ``lg`` (guideway, cantilever of length s_i at B_i), ``act`` (cable + motor,
 along the rail), ``sp`` (spherical joint, Hertz point contact at B_i), ``prox`` (proximal link,
@@ -11,14 +11,14 @@ local compliance is carried to C_i,
 and the rigid platform combines the chains at the TCP: ``G_i = Jf(C_i - T)^T``,
 ``K_T = sum_i G_i^T K_i G_i``, ``t_T = K_T^-1 W_T``, ``W_C,i = K_i G_i t_T``.
 
-Joint idealizations (CONVENTIONS.md §5): ``rigid`` (the paper: joints carry moments, K_i = S_C,i^-1)
+Joint idealizations (docs/conventions.md §5): ``rigid`` (the paper: joints carry moments, K_i = S_C,i^-1)
 and ``released`` (ideal S/U joints: each chain a two-force member, ``K_T = sum k_i g_i g_i^T``). A finite
 ``joint_rotation_compliance`` (rad/(N m)) interpolates between them: each passive joint rotation
 becomes a torsional spring, i.e. an extra compliance ``c_rot Jp Jp^T`` in the chain (seed 001's
 passive-joint elimination with springs instead of free joints).
 
 The detailed model is linear per load case: each spherical joint is linearized at the force its
-own chain transmits under the test wrench, found by fixed-point iteration (CONVENTIONS.md §6).
+own chain transmits under the test wrench, found by fixed-point iteration (docs/conventions.md §6).
 """
 from __future__ import annotations
 
@@ -113,7 +113,7 @@ def _joint_rotation_twists(legs: LegGeometry) -> tuple[np.ndarray, np.ndarray]:
     """Unit twists at C_i of the passive joint rotations: S joint (n, 6, 6, 3), U joint (n, 6, 6, 2).
 
     S: [w x (C - B); w] for w = x, y, z. U: [0; a1], [0; a2] with a1 = unit(z_P x u) (fixed in the
-    platform) and a2 = u x a1 (fixed in the link); CONVENTIONS.md §5 "Joint idealization".
+    platform) and a2 = u x a1 (fixed in the link); docs/conventions.md §5 "Joint idealization".
     """
     n = legs.n
     W = np.broadcast_to(np.eye(3), (n, 6, 3, 3))  # columns w
@@ -181,7 +181,7 @@ def _with_case_extension(case, adjust: ChainAdjustments | None) -> ChainAdjustme
 
 def chain_element_compliances(case, poses, k_sp=None, *, model: str = "detailed", params=None,
                               adjust: ChainAdjustments | None = None) -> np.ndarray:
-    """(n, 6, 5, 6, 6) compliance of element e of chain i carried to C_i, frame U (CONVENTIONS.md §4).
+    """(n, 6, 5, 6, 6) compliance of element e of chain i carried to C_i, frame U (docs/conventions.md §4).
 
     ``k_sp`` (n, 6) N/m: the Hertz stiffness to put into the spherical joints (e.g. ``ChainResult.k_sp``);
     None leaves their translational term out. The sum over elements is the chain compliance S_C,i.

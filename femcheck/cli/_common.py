@@ -17,7 +17,7 @@ class ModelLevel(str, Enum):
 
 
 class Joints(str, Enum):
-    """Joint idealization (CONVENTIONS.md §5)."""
+    """Joint idealization (docs/conventions.md §5)."""
     rigid = "rigid"
     released = "released"
 

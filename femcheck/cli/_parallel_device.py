@@ -1,4 +1,4 @@
-"""The ``parallel_device`` side of ``femcheck stiffness`` (issue 19): the same table layout as the 6-PSU path,
+"""The ``parallel_device`` side of ``femcheck stiffness``: the same table layout as the 6-PSU path,
 computed by :mod:`femcheck.parallel`."""
 from __future__ import annotations
 

@@ -141,7 +141,7 @@ def register(app: typer.Typer) -> None:
 
 def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds, extended_case=None,
                      compensation=None, poses=None) -> None:
-    """Self-weight diagnosis of a serial robot (a kinematic tree) from absolute marker positions (issue 23)."""
+    """Self-weight diagnosis of a serial robot (a kinematic tree) from absolute marker positions."""
     import math
 
     from femcheck.cli import progress

@@ -1,4 +1,4 @@
-"""``femcheck experiment simulate``: a virtual stiffness experiment with hidden effects (issue 7 item 8)."""
+"""``femcheck experiment simulate``: a virtual stiffness experiment with hidden effects."""
 from __future__ import annotations
 
 import json

@@ -2,7 +2,7 @@
 
 Meshes one part of the device (or one whole leg at a test point) from the case parameters, writes it
 with its region tags (VTU/XDMF + FILE.json sidecar with region names, reference points and quality) and
-optionally a picture with the regions coloured. See docs/geometry.md.
+optionally a picture with the regions coloured. See docs/fe_solver.md.
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """``femcheck plan CASE DATA.csv [--budget N] [--json OUT]``: the next measurements that best separate the rival
-explanations of a diagnosis (issue 15 item 4; docs/diagnose.md, "The next measurement")."""
+explanations of a diagnosis."""
 from __future__ import annotations
 
 from typing import Optional

@@ -32,7 +32,7 @@ def register(app: typer.Typer) -> None:
     ):
         """6x6 stiffness at the TCP, deflection under a wrench, and the element contributions (seed 000 Fig. 23).
 
-        The detailed model's Hertz contacts are linearized at the given wrench (CONVENTIONS.md §6).
+        The detailed model's Hertz contacts are linearized at the given wrench (docs/conventions.md §6).
         Also takes parallel_device cases (hexapods, Delta robots, ...; docs/parallel_device.md).
         """
         case = load_case_for(case_path, "stiffness", kinds=("haptic_6psu", "parallel_device"))

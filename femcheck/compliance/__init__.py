@@ -1,7 +1,7 @@
 """Compliance elements: one module per element, each a small pure function returning a local 6x6
 compliance (wrench -> twist at the element tip, local frame, SI) or its scalar ingredients.
 
-Local frames follow CONVENTIONS.md §5: every beam has local z as its axis.
+Local frames follow docs/conventions.md §5: every beam has local z as its axis.
 """
 from femcheck.compliance.actuation import actuation_compliance, cable_stiffness, motor_stiffness_at_cable
 from femcheck.compliance.cantilever_beam import cantilever_compliance

@@ -1,5 +1,5 @@
 """Actuation: cable in series with the motor shaft torsion reflected through the capstan
-(seed 000 eqs. 43-46; CONVENTIONS.md §5 "Actuation").
+(seed 000 eqs. 43-46; docs/conventions.md §5 "Actuation").
 
     k_cable = E_c (pi d_c^2 / 4) / l_c                         axial rope stiffness (N/m)
     K_rotor = G (pi d_s^4 / 32) / L_s                          shaft torsion (N m / rad)
@@ -7,7 +7,7 @@
     c_act = 1/k_cable + 1/k_motor,  S_act = c_act [e e^T, 0; 0, 0]   (translation along the rail e)
 
 The paper puts 1/K_rotor on a rotational entry and sums stiffnesses (eq. 46); the motor torsion acts
-through the capstan in series with the cable, so compliances add ([DEV] in CONVENTIONS.md). The
+through the capstan in series with the cable, so compliances add ([DEV] in docs/conventions.md). The
 position loop is taken as ideal (no servo stiffness).
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Cantilever beam tip compliance (CONVENTIONS.md §5; replaces seed 000 eq. 14 and the B_S_C matrix, eq. 17).
+"""Cantilever beam tip compliance (docs/conventions.md §5; replaces seed 000 eq. 14 and the B_S_C matrix, eq. 17).
 
 Clamped at local z = 0, tip at z = L; wrench and twist both at the tip, local frame, Euler-Bernoulli
 with optional Timoshenko shear:

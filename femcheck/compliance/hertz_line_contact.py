@@ -1,12 +1,12 @@
 """Universal joint: Hertz line contact of a pin in its bore plus simply supported pin bending
-(seed 000 eqs. 36-42; CONVENTIONS.md §5 "Universal joint").
+(seed 000 eqs. 36-42; docs/conventions.md §5 "Universal joint").
 
     K_UC = pi l E* / 2                       line-contact stiffness (the paper's pi l E'/4, E' = 2E*)
     K_UB = 48 E_pin (pi r^4 / 4) / L_u^3     centre-loaded simply supported pin of span L_u
     S_uj^L = diag(1/K_UC, 1/K_UC, 1/K_UC + 1/K_UB, 0, 0, 0)   in the link frame B_i at C_i
 
 Contact and bending carry the same force along the link axis, so they are in series (the paper
-has K_uz = K_UB alone; see CONVENTIONS.md [DEV]).
+has K_uz = K_UB alone; see docs/conventions.md [DEV]).
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Hertz point contact of the spherical joint: ball on a seat (seed 000 eqs. 27-35; Johnson, Contact
-Mechanics, §4.2; CONVENTIONS.md §5 "Spherical joint").
+Mechanics, §4.2; docs/conventions.md §5 "Spherical joint").
 
     1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2,    1/R* = 1/R_ball + kappa_seat
     F = (4/3) E* sqrt(R*) delta^(3/2)                      (force-approach law)

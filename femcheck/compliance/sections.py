@@ -1,4 +1,4 @@
-"""Cross-section properties of the beam elements (CONVENTIONS.md §5, "Sections").
+"""Cross-section properties of the beam elements (docs/conventions.md §5, "Sections").
 
 Local frame: beam axis z; ``Iy = int x^2 dA`` resists bending deflection along x, ``Ix = int y^2 dA``
 along y. All inputs may be numpy arrays (broadcast), so that sweeps evaluate many sections at once.

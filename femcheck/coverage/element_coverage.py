@@ -9,7 +9,7 @@ part does not. The verify check (mean analytical-FE error per direction against
 
 Per element:
 
-- ``share_pct``: the element's mean share of the complementary energy (CONVENTIONS.md §7) at the points;
+- ``share_pct``: the element's mean share of the complementary energy (docs/conventions.md §7) at the points;
 - ``fe_source``: from behaviour, not a label: ``shared_closed_form`` when the FE deflection moves with the
   mutation like the analytical one (ratio of the relative changes >= 0.5: the FE reuses the law), else
   ``meshed`` (the FE does not move: its element is an independent model), or ``contact_fe`` when the FE does

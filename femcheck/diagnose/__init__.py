@@ -1,4 +1,4 @@
-"""Measured data -> what the model gets wrong, why, the extended model and the gain (issue 7).
+"""Measured data -> what the model gets wrong, why, the extended model and the gain.
 
 ``diagnose(model, readings)`` fits the library of physical effects (``effects``), selects up to two by
 information criterion and leave-points-out cross-validation (``selection``) and reports the held-out

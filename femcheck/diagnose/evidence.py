@@ -1,4 +1,4 @@
-"""Goodness of fit, evidence weights and the verdict of a diagnosis (issue 15 items 1, 2).
+"""Goodness of fit, evidence weights and the verdict of a diagnosis.
 
 Generic: it knows nothing of the device. It takes, per rival explanation, the chi^2 of its weighted
 residual vector r = (model - measured) / sigma (N data), and its number of fitted parameters k, and
@@ -47,7 +47,7 @@ returns
   leading explanation leaves, ``max(chi2_best - dof_best, 0) / max(chi2_none - dof_none, eps)`` in [0, 1],
   and 0 when the named explanation fits within noise.
 
-A future serial-robot diagnosis uses it with its own residual model (issue 23): only chi^2, N and k enter.
+A future serial-robot diagnosis uses it with its own residual model: only chi^2, N and k enter.
 """
 from __future__ import annotations
 

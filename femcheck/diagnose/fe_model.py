@@ -1,4 +1,4 @@
-"""The device FE model with contact joints as a reading model (FE-backed diagnosis, issue 7).
+"""The device FE model with contact joints as a reading model (FE-backed diagnosis).
 
 Wraps the point models of a finished FE run (:func:`femcheck.verify.fe.run_fe`: solid guideway and link
 super-elements at each test point) and predicts the TCP translation of a reading by solving the

@@ -1,4 +1,4 @@
-"""Fit effect parameters to the readings (issue 7 item 5): bounded nonlinear least squares
+"""Fit effect parameters to the readings: bounded nonlinear least squares
 (``scipy.optimize.least_squares``, trust-region reflective), covariance from the Jacobian and
 identifiability warnings.
 

@@ -1,5 +1,5 @@
 """Structured lack of fit: does the residual of an explanation still hold a linear-elastic discrepancy that
-noise cannot make? (issue 15 item 1)
+noise cannot make?
 
 Two discrepancy spaces are tested (Bonferroni: the smaller p-value times 2 is the test's p-value):
 

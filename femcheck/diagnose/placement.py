@@ -1,4 +1,4 @@
-"""Where a located cause sits: which legs of an element type (issue 15 item 3), found without trying every subset.
+"""Where a located cause sits: which legs of an element type, found without trying every subset.
 
 For each element type e (an :class:`~femcheck.diagnose.effects._located.ElementInLegs` effect) the 2^6 - 1 leg
 subsets are not fitted one by one. Instead (the screening of Chen & Chen's extended BIC, as in the serial-robot
@@ -253,7 +253,7 @@ SUBSETS_BY_SIZE = {k: np.array(list(itertools.combinations(range(6), k)), int) f
 def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.ndarray, n_data: int,
                   sigma_dof: int = 0, lower: np.ndarray | None = None, chi2_at=None,
                   chain_below: float = np.inf) -> tuple[list, dict]:
-    """-2 ln evidence of every placement of one element type, each linearized about the same point (issue 15 item 2).
+    """-2 ln evidence of every placement of one element type, each linearized about the same point.
 
     ``G`` (N, 6): weighted Jacobian of the readings in the six leg scales; ``r0`` (N,): weighted residual at the
     linearization point; ``sd`` (6,) the prior width of each leg's scale deviation (prior N(0, sd^2) about that
@@ -346,7 +346,7 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
 
 def unweighed_placements(model, readings, located, *, skip=None, background=None, base_scores=None,
                          sigma_dof: int = 0, hopeless_above: float = np.inf) -> list[tuple[object, dict]]:
-    """The evidence of each located cause summed over the placements that no fit weighed (issue 15 item 2).
+    """The evidence of each located cause summed over the placements that no fit weighed.
 
     A diagnosis fits a few placements of each element type (the screen's best, the partners, ...). The posterior of
     an element type is the sum over *all* its placements, -2 ln sum_L exp(-s_L / 2); the others are scored here

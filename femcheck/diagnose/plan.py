@@ -1,5 +1,5 @@
 """The next measurements: which poses, load directions and load levels best separate the rival explanations
-of a diagnosis (issue 15 item 4; ``femcheck plan``).
+of a diagnosis.
 
 Candidates
     *Poses* anywhere in the reachable workspace: a scrambled Sobol' sample of TCP positions in a box of

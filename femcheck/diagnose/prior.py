@@ -1,5 +1,5 @@
 """The parameter prior of every effect: what the Laplace evidence integrates over and what the calibration bench
-draws its hidden truths from (issue 15 item 2).
+draws its hidden truths from.
 
 Each fitted parameter p of an effect has, in the optimizer's scaled coordinate x = ``Param.to_x(value)`` (log10 of
 the value for ``Param.log`` parameters, value / ``Param.typical`` otherwise), an independent normal prior

@@ -1,6 +1,6 @@
-"""Residual analysis of a model against measured readings (issue 7 item 3).
+"""Residual analysis of a model against measured readings.
 
-Error metric (CONVENTIONS.md §9, seed 000 Tables 2/3): per point and load direction the eq. 1 deflection
+Error metric (docs/conventions.md §9, seed 000 Tables 2/3): per point and load direction the eq. 1 deflection
 delta = delta_t - delta_p of model and measurement; the *along-load* relative error
 ``|u.(delta_model - delta_meas)| / |u.delta_meas|`` (the seed's) and the *vector* relative error
 ``|delta_model - delta_meas| / |delta_meas|`` (also counts axis cross-talk, our default for the held-out
@@ -18,7 +18,7 @@ z-score; ``|z| > 3`` flags it:
   minus model, m;
 * ``hysteresis``: mean unload-minus-preload reading at P_p plus the residual reading at zero load, measured
   minus model, along the load, m;
-* ``leg_asymmetry``: the device is mirror-symmetric in y (CONVENTIONS.md §2): mean |rho(P) - rho(mirror P)|
+* ``leg_asymmetry``: the device is mirror-symmetric in y (docs/conventions.md §2): mean |rho(P) - rho(mirror P)|
   over mirrored pairs (P1/P4, P2/P3, P5/P8, P6/P7) for x and z loads;
 * ``cross_talk``: rms of the off-load components of delta_meas - delta_model relative to |delta_meas|.
 """

@@ -1,4 +1,4 @@
-"""Model selection that does not fool itself (issue 7 item 6).
+"""Model selection that does not fool itself.
 
 Greedy forward selection over the effect library, at most ``max_effects`` (2) effects:
 
@@ -353,8 +353,7 @@ def _partner_leads(rivals, n_leads: int, bic_margin: float) -> list:
 
 def unweighed_explanations(model, readings, located, rivals, leads) -> list:
     """One explanation per element type (alone, and with each lead of :func:`_partner_leads`) holding the evidence
-    of its placements that no fit weighed (:func:`femcheck.diagnose.placement.unweighed_placements`; issue 15
-    item 2): the posterior of a located cause is then summed over all its placements, the fitted ones exactly and
+    of its placements that no fit weighed (:func:`femcheck.diagnose.placement.unweighed_placements`): the posterior of a located cause is then summed over all its placements, the fitted ones exactly and
     the others linearized. These explanations have no fit (``payload`` None, ``fixed_scores`` set): they count in
     the marginal probability of their causes and in ``alternatives``, never as the named explanation."""
     n_data = 3 * readings.n_states
@@ -395,7 +394,7 @@ def unweighed_explanations(model, readings, located, rivals, leads) -> list:
 
 def located_partners(model, readings, located, screened, rivals, *, n_leads: int = 1,
                      bic_margin: float = 10.0, siblings: bool = False) -> tuple[list, list]:
-    """Placements of located causes beyond those in the full pool, and their explanations (issue 15 items 2, 3).
+    """Placements of located causes beyond those in the full pool, and their explanations.
 
     Two sources, one mechanism:
 
@@ -589,7 +588,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         log.info("selected %s lowers the held-out chi^2 but not the held-out relative error: answer none",
                  "+".join(e.id for e in chosen))
         chosen, cur_fit, cur_cv = [], base, cv_base
-    # issue 15: weigh every rival (none, singles, pairs up to max_effects) by BIC evidence; the leader is the answer
+    # weigh every rival (none, singles, pairs up to max_effects) by BIC evidence; the leader is the answer
     for rnd_left in range(rnd + 1, max_effects):
         step(f"selection round {rnd_left + 1} (not needed)")
     rivals = fit_rivals(model, readings, pool, base, pairs=max_effects >= 2 and rivals_pairs, known=known)

@@ -1,5 +1,4 @@
-"""Out-of-vocabulary effects: plausible device errors that no diagnosis effect module can express
-(issue 15 item 5). They test that a diagnosis says "unexplained" instead of naming the closest wrong cause.
+"""Out-of-vocabulary effects: plausible device errors that no diagnosis effect module can express. They test that a diagnosis says "unexplained" instead of naming the closest wrong cause.
 
 Each acts on the noiseless readings d (r, 3) m of the protocol (:func:`femcheck.experiment.simulate.simulate`
 with zero noise and resolution), per row, before noise and quantization are added:

@@ -1,4 +1,4 @@
-"""Virtual stiffness experiment following seed 000's protocol (§3.1.3, §4.3.2; CONVENTIONS.md §9-10).
+"""Virtual stiffness experiment following seed 000's protocol (§3.1.3, §4.3.2; docs/conventions.md §9-10).
 
 At each of the 9 test points and each load direction, for every trial: zero the dials unloaded, apply
 the preload P_p and read, apply P_p + P_T and read, unload to P_p and read, unload to 0 and read. At P0 a

@@ -1,4 +1,4 @@
-"""3D two-node beam elements (12 DOF): Euler–Bernoulli with optional Timoshenko shear (issue 5 item 2).
+"""3D two-node beam elements (12 DOF): Euler–Bernoulli with optional Timoshenko shear.
 
 Local frame per element: local **z is the beam axis** (node 1 → node 2, the convention of the analytical
 models), local x is the component of the element's ``orientation`` vector normal to the axis (default:

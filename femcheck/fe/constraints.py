@@ -1,4 +1,4 @@
-"""Linear multipoint constraints by elimination: u = T q + g (issue 5 item 3).
+"""Linear multipoint constraints by elimination: u = T q + g.
 
 Every constraint is a set of *relations* ``u_d = Σ_j D_dj u_j + b_d`` that make some DOFs d *dependent*;
 all other DOFs are *independent* and form the reduced unknowns q (in ascending DOF order). Relations

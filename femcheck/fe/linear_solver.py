@@ -1,6 +1,6 @@
 """Sparse linear solvers for the FE equations K u = f, chosen automatically by size and availability.
 
-Three paths (issue 5 item 6):
+Three paths:
 
 * ``"pardiso"`` — Intel MKL PARDISO through :mod:`pypardiso` (direct, multithreaded). Symmetric matrices are
   factorized as real symmetric indefinite (``mtype=-2``, Bunch–Kaufman LDLᵀ, upper triangle only), others as
@@ -16,7 +16,7 @@ Three paths (issue 5 item 6):
   measured 20–77× PARDISO on the 82k-unknown Hertz system). Used only when asked for, or by ``"auto"``
   when neither pypardiso nor cvxopt imports — then with a warning naming what to install.
 
-``"auto"`` (issue 17): PARDISO where MKL exists, else CHOLMOD for symmetric matrices (UMFPACK for
+``"auto"``: PARDISO where MKL exists, else CHOLMOD for symmetric matrices (UMFPACK for
 unsymmetric ones), else SuperLU with a warning. The process-wide choice that replaces ``"auto"`` comes from
 :func:`set_preferred` (the CLI ``--linear-solver`` option, a case file's ``[solver] linear``) or the
 environment variable ``FEMCHECK_LINEAR_SOLVER``; :func:`methods_used` lists which solvers actually ran
@@ -44,7 +44,7 @@ import scipy.sparse.linalg as spla
 log = logging.getLogger(__name__)
 
 METHODS = ("auto", "pardiso", "cholmod", "umfpack", "mumps", "superlu", "splu", "amg-cg")
-#: the values of a case file's ``[solver] linear`` and of ``--linear-solver`` (issue 17 contract)
+#: the values of a case file's ``[solver] linear`` and of ``--linear-solver``
 CHOICES = ("auto", "pardiso", "cholmod", "mumps", "superlu", "umfpack")
 ENV_VAR = "FEMCHECK_LINEAR_SOLVER"
 _preferred: str | None = None

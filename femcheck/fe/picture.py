@@ -1,4 +1,4 @@
-"""Off-screen pictures of FE results (pyvista), issue 5 item 7.
+"""Off-screen pictures of FE results (pyvista).
 
 :func:`render_png` draws a VTU file (or a meshio/pyvista mesh) coloured by one point or cell field,
 optionally on the shape deformed by ``displacement_m`` × ``warp`` (a display magnification), and writes a

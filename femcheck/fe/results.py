@@ -1,9 +1,9 @@
-"""FE results and their VTU output (issue 5 item 7).
+"""FE results and their VTU output.
 
 :class:`ElasticResult` bundles a solved displacement field with its basis and material; it derives the
 vertex displacements (m), von Mises stress (Pa), the strain-energy density w = ½ σ:ε (J/m³; both per
 element as the quadrature mean and averaged to vertices) and, when the constrained DOFs are given, the
-reaction forces r = K u − f at the supports (N), and writes a VTU file with meshio (issue 17). Integrated
+reaction forces r = K u − f at the supports (N), and writes a VTU file with meshio. Integrated
 over the mesh, w gives the strain energy ½ uᵀK u = ½ uᵀf (Clapeyron) exactly, since the quadrature of the
 basis integrates the P2 stiffness exactly; the reactions sum to minus the applied load. Contact quantities (pressure Pa, status 0 open / 1 stick / 2 slide, gap m) are
 attached as extra point data on the mesh vertices when given, and/or written as a separate VTU point

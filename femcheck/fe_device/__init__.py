@@ -1,4 +1,4 @@
-"""FE model of the whole 6-PSU device (issue 6): solid guideways and proximal links condensed to
+"""FE model of the whole 6-PSU device: solid guideways and proximal links condensed to
 super-elements at their joint reference nodes, joints as couplings (or springs), legs condensed to
 the platform attachment C_i and assembled at the rigid platform (``docs/verify.md``).
 

@@ -1,7 +1,7 @@
 """The actuation system as finite elements: motor shaft, capstan, idler and cable strands (seed 000 §4.4.2-4.4.3).
 
 The analytical chain uses eq. 44: a single strand of length l in series with the shaft torsion seen through the
-capstan, c_act = l / (E_c A_c) + r² L_r / (G J) (CONVENTIONS.md §5, "Actuation"). This module builds the same
+capstan, c_act = l / (E_c A_c) + r² L_r / (G J) (docs/conventions.md §5, "Actuation"). This module builds the same
 mechanism from elements, independently of that law, and condenses it to the slider:
 
 * **motor shaft**: one 3D beam element (:mod:`femcheck.fe.beam`, circle of ``shaft_diameter_m``, shear modulus

@@ -150,7 +150,7 @@ def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, direct
             if j == "contact" and lvl != "detailed":
                 continue
             for d in directions:
-                # the simplified level has no actuation element (CONVENTIONS.md §5), so no cable across the rail
+                # the simplified level has no actuation element (docs/conventions.md §5), so no cable across the rail
                 K_guide = K_lg if lvl == "detailed" else model.K_lg
                 out[(lvl, j, d)] = load_case(case, K_guide, model.link.K, model.R_A, model.R_B, model.G,
                                              lvl, j, d, params, friction, k_act, joint_laws)

@@ -1,6 +1,6 @@
 """``check-joints``: each joint's contact FE under the load the device puts on it, vs its closed-form law.
 
-Load state (seed 000 eq. 1, CONVENTIONS.md §8). With ideal passive joints every leg is a two-force
+Load state (seed 000 eq. 1, docs/conventions.md §8). With ideal passive joints every leg is a two-force
 member, so the TCP wrench W is carried by the leg forces f (6,) along the link axes u_i:
 
     J f = W,   J = [u_i ; (C_i − tcp) × u_i]  (6 x 6, column i per leg)
@@ -10,7 +10,7 @@ loaded joint (largest |f_i| over legs and directions at the test point) sets the
 levels F_5 = |f_i(P_p)|, F_20 = |f_i(P_p + P_T)|, which the contact FE applies along the joint axis
 (:func:`femcheck.fe_device.joint_fe.solve_joint`).
 
-The joint table (issue 14 part 3) compares, per joint and component (axial, lateral, tilt, spin), the
+The joint table compares, per joint and component (axial, lateral, tilt, spin), the
 FE compliance with the analytical law (:func:`femcheck.fe_device.joint_fe.analytical_compliance`).
 """
 from __future__ import annotations
@@ -28,7 +28,7 @@ log = logging.getLogger(__name__)
 
 #: table components: (name, index into the 6 x 6 diagonal)
 TABLE_COMPONENTS = (("axial", 2), ("lateral", 0), ("tilt", 3), ("spin", 5))
-#: a law is flagged when it is off by more than this (issue 14 part 3)
+#: a law is flagged when it is off by more than this
 FLAG_PCT = 10.0
 
 
@@ -69,7 +69,7 @@ BUILD_SHARE = 0.9
 def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", progress=None) -> dict:
     """Contact FE of ``joint`` at the device load of ``point``: the JSON object of ``check-joints``.
 
-    Keys (contract, issue 14): converged, dofs, iterations, seconds, fe_compliance, analytical_compliance
+    Keys (contract): converged, dofs, iterations, seconds, fe_compliance, analytical_compliance
     (6 x 6, SI), error_pct (per component, on ``fe_component_compliance``: each component with the other
     five held, as the per-component springs of the analytical model are defined); plus fe_tangent_stiffness, loads_N, factorizations, augmentations, free_dofs,
     retained_dofs, condense_s, secant_axial_m_per_N, closed_points, mesh, point, contact_size_m, bulk_size_m,
@@ -142,7 +142,7 @@ def _json_matrix(C: np.ndarray) -> list:
 
 
 def joint_table_rows(results: list[dict]) -> list[dict]:
-    """Joint table (issue 14 part 3): one row per (joint, component) with FE and analytical compliance
+    """Joint table: one row per (joint, component) with FE and analytical compliance
     (SI), error %, and the law the FE supports where the closed form is off by more than 10 %."""
     rows = []
     for res in results:
@@ -181,7 +181,7 @@ def write_joint_table_csv(rows: list[dict]) -> str:
 
 
 def joint_law_adjustments(results: list[dict]):
-    """The FE-measured joint laws as an option of the extended analytical model (issue 14 part 3).
+    """The FE-measured joint laws as an option of the extended analytical model.
 
     A leg with ideal passive joints is a two-force member, so its joints work along their axes: the
     axial compliance is the joint law that enters the leg. This returns

@@ -1,4 +1,4 @@
-"""Contact FE of the spherical joint alone vs its Hertz model (issue 6, detailed level, partial).
+"""Contact FE of the spherical joint alone vs its Hertz model.
 
 Model: the ``geometry.spherical_joint`` part (steel ball on the polymer seat of the case, flat seat as
 in the paper), P2 tetrahedra, materials per body from the case. The seat bottom is clamped (it sits on
@@ -8,7 +8,7 @@ only. A force F along −z on B presses the ball into the seat; penalty contact 
 updates and modified Newton–Raphson (``femcheck.fe.newton.solve_contact``), frictionless normal contact.
 
 Compared quantity: the approach δ(F) = −u_z(B) at the eq. 1 load levels (5 N and 20 N, and 15 N), and
-the eq. 1 increment δ(20) − δ(5) against the Hertz closed form (Johnson eq. 4.23, CONVENTIONS.md §5)
+the eq. 1 increment δ(20) − δ(5) against the Hertz closed form (Johnson eq. 4.23, docs/conventions.md §5)
 δ_H(F) = (3F / (4 E* √R*))^{2/3}. The FE contains, besides the Hertz approach of two half-spaces,
 the bulk compression of the finite seat disk and of the ball between the contact and the coupling cap,
 so it is expected to be somewhat softer; the ratio is what the detailed analytical model leaves out.

@@ -1,4 +1,4 @@
-"""Passive joints as meshed contact bodies, condensed onto their contact surfaces (issue 14, part 1).
+"""Passive joints as meshed contact bodies, condensed onto their contact surfaces.
 
 Each joint is meshed with P2 tetrahedra (``geometry.spherical_joint``: ball in a flat or socket seat;
 ``geometry.universal_joint``: cross pins in yoke bores, with the case's clearance and pin position),

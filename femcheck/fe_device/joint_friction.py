@@ -13,11 +13,11 @@ ball spin (z_U)      (3π/16) μ_sp F a            (16/3) G* a³ (torsion of a s
 pin a1, a2 (x_B,y_B) μ_uj F r_pin                k_t,line r_pin², k_t,line = K_UC 2(1-ν)/(2-ν) (Mindlin ratio)
 ==================  ==========================  ========================================================
 
-F is the force the leg's joint transmits (CONVENTIONS.md §6), a = (3 F R* / (4 E*))^{1/3} the Hertz radius,
+F is the force the leg's joint transmits (docs/conventions.md §6), a = (3 F R* / (4 E*))^{1/3} the Hertz radius,
 1/G* = (2-ν1)/G1 + (2-ν2)/G2 (Johnson §7.1). ρ (``tilt_slip_ratio``, 1 by the argument above) is the
 ratio M / (μ F R_b) that the contact FE of the ball alone measures in full slip
 (:func:`femcheck.fe_device.joint_contact.spherical_joint_tilt`); the verification passes it in.
-Seat normal = rail direction e = z_U (CONVENTIONS.md §2), so the spin component is θ_z in frame U.
+Seat normal = rail direction e = z_U (docs/conventions.md §2), so the spin component is θ_z in frame U.
 
 Load path. Under the test protocol the TCP load grows monotonically along one direction, so every
 joint's force and rotation grow in proportion (proportional loading): a joint then sticks or slides

@@ -1,4 +1,4 @@
-"""FE-measured joint laws: the device FE's passive joints as their contact FE finds them (issue 14 part 2).
+"""FE-measured joint laws: the device FE's passive joints as their contact FE finds them.
 
 The closed-form joint laws (Hertz point contact of the ball, Mindlin stick, Hertz line contact plus pin
 bending of the U joint; seed 000 §4.4.1) stay in the analytical model. The device FE instead takes each

@@ -1,10 +1,10 @@
 """What each joint of a leg does with the six relative DOFs between the two nodes it joins.
 
 A joint between node a and node b (both at the same point) is written in a joint frame R (3 x 3,
-columns = axes in U) through its relative twist r: u_b = u_a + Rot(R) r (CONVENTIONS.md §4, Rot =
+columns = axes in U) through its relative twist r: u_b = u_a + Rot(R) r (docs/conventions.md §4, Rot =
 blockdiag(R, R)). Every component of r is either *tied* (r_k = 0, a coupling), *free* (no stiffness, a
 released joint rotation) or a *spring* of stiffness k (N/m), so a joint is the selection E (6 x k) of the
-non-tied components. Per CONVENTIONS.md §5 and issue 6:
+non-tied components. Per docs/conventions.md §5:
 
 =========  ===============  ===================================================================
 joint      frame            simplified level / detailed level
@@ -20,7 +20,7 @@ The detailed FE also has ``contact`` joints (:data:`FE_JOINTS`): the joints as t
 joint alone finds them — translations as above, the rotations that an ideal joint releases (sp: all
 three, uj: a1 and a2) carry the frictional stick/slip law of :mod:`.joint_friction` as secant springs.
 
-(x_B = unit(z x u_i) is the a1 of CONVENTIONS.md §5 at the test points, y_B = u_i x a1 = a2.)
+(x_B = unit(z x u_i) is the a1 of docs/conventions.md §5 at the test points, y_B = u_i x a1 = a2.)
 """
 from __future__ import annotations
 

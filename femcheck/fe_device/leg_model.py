@@ -3,7 +3,7 @@
 Nodes of a leg (all 6-DOF, frame U): B_g guideway tip (slider end of the bar), B_l link end at the ball
 centre, C_l link end at the U-joint centre, C_p the platform point C_i. The guideway super-element
 (6 x 6, clamped at A_i) acts on B_g, the link super-element (12 x 12) on (B_l, C_l), both rotated from
-their part frames with Rot(R) = blockdiag(R, R) (CONVENTIONS.md §4). The joints (:mod:`.joints`) give
+their part frames with Rot(R) = blockdiag(R, R) (docs/conventions.md §4). The joints (:mod:`.joints`) give
 
     u_Bl = u_Bg + Rot(R_A) E_act r_act + E_sp r_sp,        u_Cl = u_Cp + Rot(R_B) E_uj r_uj,
 
@@ -14,7 +14,7 @@ so the leg unknowns are q = [u_Bg, r_act, r_sp, r_uj, u_Cp] with u = T q and
 Static condensation onto u_Cp gives the leg stiffness at C_i (exact, no load inside the leg):
 
     K_i = K_bb - K_bi K_ii^-1 K_ib   (6 x 6; rank 6 for rigid joints, rank 1 for released ones,
-                                      the FE counterpart of CONVENTIONS.md §4-5 K_i).
+                                      the FE counterpart of docs/conventions.md §4-5 K_i).
 """
 from __future__ import annotations
 

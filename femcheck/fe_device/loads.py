@@ -1,10 +1,10 @@
-"""Load protocol of the device FE model (seed 000 §4.2 and eq. 1; CONVENTIONS.md §8-9).
+"""Load protocol of the device FE model (seed 000 §4.2 and eq. 1; docs/conventions.md §8-9).
 
 * simplified level: the test load P_T (50 N) along +x, +y or +z at the TCP; the model is linear, so the
   deflection is the response to P_T alone (the 15 N preload of the experiment cancels in eq. 1).
 * detailed level: preload P_p (5 N), then P_p + P_T (20 N); deflection δ = t(P_p + P_T) − t(P_p) (eq. 1).
   The spherical joints are nonlinear Hertz springs, F = (4/3) E* √R* δ^{3/2} (Johnson 1985 eq. 4.23,
-  CONVENTIONS.md §5), isotropic as in the analytical model. Each load state is solved exactly by a
+  docs/conventions.md §5), isotropic as in the analytical model. Each load state is solved exactly by a
   fixed point on the secant stiffness k_i = F_i / δ(F_i) of each joint, F_i = max(|f_i|, F_min) the force
   its leg transmits (the secant of a nonlinear elastic spring reproduces its force at that state):
   start from the tangent stiffness at F_min, iterate until the largest relative change of k is < 1e-10.
@@ -16,7 +16,7 @@
   makes the secant (deformation-theory) form of the stick/slip law exact (see that module).
 
 The analytical detailed model instead uses the *tangent* stiffness at the force of the test load alone
-(CONVENTIONS.md §6); the two differ in the spherical-joint term only (measured in docs/verify.md).
+(docs/conventions.md §6); the two differ in the spherical-joint term only (measured in docs/verify.md).
 """
 from __future__ import annotations
 

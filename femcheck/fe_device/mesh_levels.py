@@ -30,7 +30,7 @@ def mesh_sizes(case, level: str = "default") -> MeshSizes:
     return MeshSizes(level, f * m.guideway_size_m, f * m.proximal_link_size_m)
 
 
-# ---- graded contact-FE levels of the passive joints (issue 14 part 1) --------------------------------
+# ---- graded contact-FE levels of the passive joints --------------------------------
 
 #: ball in seat: edge of the elements in the Hertz patch = a / JOINT_CONTACT_FRACTION[level] (a = Hertz
 #: contact radius at the largest joint load); the bulk keeps the case's joint size at every level

@@ -1,9 +1,9 @@
-"""Monolithic leg check (issue 14, part 4): one complete leg meshed as ONE contact model, vs the
+"""Monolithic leg check: one complete leg meshed as ONE contact model, vs the
 substructured leg that uses the joints' FE-measured laws.
 
 Monolithic model. Every body of leg i at a test point is meshed with the existing builders and placed in
 the link frame B_i with its origin at the ball centre B (z = u_i, x = a1 = unit(z_U × u_i), the frame of
-the universal joint, CONVENTIONS.md §2):
+the universal joint, docs/conventions.md §2):
 
 * guideway bar (``geometry.guideway``, frame A_i, length s_i, clamped at A_i), moved by x → R_Bᵀ (R_A x + A − B);
 * slider seat + ball (``geometry.spherical_joint``, flat seat of the case), seat normal along u_i;
@@ -70,7 +70,7 @@ from femcheck.errors import FemcheckError
 
 log = logging.getLogger(__name__)
 
-#: agreement asked of the two leg models (issue 14 part 4)
+#: agreement asked of the two leg models
 AGREEMENT_REL = 0.02
 #: force-balance tolerance of the leg's contact solve, ‖r‖ ≤ LEG_RTOL F_20. The joint FE uses 1e-9; the leg's
 #: condensed system carries the frictionless mechanisms of the leg (the ball sliding on its seat, the pins

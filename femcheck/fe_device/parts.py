@@ -1,7 +1,7 @@
 """Super-elements of the two flexible parts of a leg: the guideway bar and the proximal-link tube.
 
 A part is meshed in its own local frame (geometry package: guideway frame A_i, origin at the clamp A, z
-along the rail; link frame B_i, origin at the ball centre B, z along the link, CONVENTIONS.md §2),
+along the rail; link frame B_i, origin at the ball centre B, z along the link, docs/conventions.md §2),
 discretized with P2 tetrahedra (``femcheck.fe.elasticity``) and tied to 6-DOF reference nodes by rigid
 couplings (RBE2, ``femcheck.fe.constraints.rigid_coupling``) on its end faces:
 
@@ -16,7 +16,7 @@ with b the reference-node DOFs and i every other independent DOF of the constrai
 u = T q (``Constraints.reduce_matrix``). The guideway gives a 6 x 6 tip stiffness (clamped), the link a
 12 x 12 free-free stiffness (rank 6). The interior field is recovered as u = X u_ref (``recovery``).
 ``kind="beam"`` gives the same objects from the 12-DOF beam element (``femcheck.fe.beam``) with the
-case's shear option: exactly the analytical cantilever (CONVENTIONS.md §5).
+case's shear option: exactly the analytical cantilever (docs/conventions.md §5).
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ u_ref (in the part frame), the vertex displacements are u = X u_ref (``SuperElem
 to U. Detailed-level fields follow the eq. 1 protocol: (state at P_p + P_T) − (state at P_p).
 One VTU per test point holds the mesh of the six guideways and six links (world frame U, m, linear
 tetrahedra) and one displacement field per (level, joints, direction), named ``u_<level>_<joints>_<dir>``,
-and per load case (issue 17) the cell fields ``von_mises_<...>_Pa`` and ``strain_energy_density_<...>_J_m3``
+and per load case the cell fields ``von_mises_<...>_Pa`` and ``strain_energy_density_<...>_J_m3``
 (w = ½ σ:ε) of the linear-tetrahedron interpolation of the vertex displacements (constant strain per
 tetrahedron, so a smoothed view of the P2 part solution, not its exact stress), and the point field
 ``clamp_reaction_<...>_N`` (N, 3): the force the rail clamp exerts on guideway i, from the equilibrium of the

@@ -1,7 +1,7 @@
 """Legs joined by the rigid platform: assembly of the condensed legs, and the whole-device check solve.
 
 The platform is rigid and the legs touch each other only through it, so with the leg stiffness K_i at
-C_i (:mod:`.leg_model`) the TCP stiffness is exactly (CONVENTIONS.md §4)
+C_i (:mod:`.leg_model`) the TCP stiffness is exactly (docs/conventions.md §4)
 
     K_T = Σ_i G_iᵀ K_i G_i,   G_i = Jf(C_i - T)ᵀ,   t_T = K_T⁻¹ W_T,   u_C,i = G_i t_T.
 

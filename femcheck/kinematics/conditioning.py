@@ -1,4 +1,4 @@
-"""Distance of poses from the singularities of the 6-PSU device (CONVENTIONS.md §3).
+"""Distance of poses from the singularities of the 6-PSU device (docs/conventions.md §3).
 
 The homogenized velocity Jacobian ``J_h = J diag(I3, I3 / R_p)`` (row i = ``[u_i; (C_i - T) x u_i]^T /
 (u_i . e)``) degenerates in two ways:

@@ -1,7 +1,7 @@
 """Load directions: the one parser of a direction string ('+x', '-y', 'z') into a unit 3-vector.
 
 Every caller (verify, sweep, device FE loads, CLI) resolves a direction here once and passes the
-vector on; the spelling of a direction is part of the case/CLI contract (CONVENTIONS.md, base frame).
+vector on; the spelling of a direction is part of the case/CLI contract (docs/conventions.md, base frame).
 """
 from __future__ import annotations
 

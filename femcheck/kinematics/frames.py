@@ -1,4 +1,4 @@
-"""Small-displacement frame algebra for wrenches and twists (seed 000 eqs. 2-12; CONVENTIONS.md §1, §4).
+"""Small-displacement frame algebra for wrenches and twists (seed 000 eqs. 2-12; docs/conventions.md §1, §4).
 
 Wrench ``W = [F; M]`` and twist ``t = [d; theta]`` are 6-vectors, force/translation first. All
 functions are vectorized: leading axes broadcast, the last one or two axes are the 3- or 6-vectors.

@@ -38,7 +38,7 @@ class PointSet:
 
 
 def point_set(case, labels=None) -> PointSet:
-    """The :class:`PointSet` of ``labels`` (default all nine, P0..P8) of ``case``'s test cube (CONVENTIONS.md §8)."""
+    """The :class:`PointSet` of ``labels`` (default all nine, P0..P8) of ``case``'s test cube (docs/conventions.md §8)."""
     labels = tuple(labels or POINT_LABELS)
     poses = test_points(case)[point_index(labels)]
     poses.setflags(write=False)

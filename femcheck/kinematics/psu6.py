@@ -1,4 +1,4 @@
-"""6-PSU inverse kinematics, test points and Jacobian (seed 000 §4; CONVENTIONS.md §2-3, §8).
+"""6-PSU inverse kinematics, test points and Jacobian (seed 000 §4; docs/conventions.md §2-3, §8).
 
 Poses are TCP poses ``[x, y, z, rx, ry, rz]`` (m, rad; rotation vector of the platform frame P in U),
 shape (n, 6). Everything is vectorized over poses; chains (legs) i = 0..5 are the second axis.
@@ -52,7 +52,7 @@ def as_poses(poses) -> np.ndarray:
 
 
 def test_points(case) -> np.ndarray:
-    """(9, 6) TCP poses of the test cube: P0 = nominal, P1..P8 = P0 + edge/2 * corner_signs (CONVENTIONS.md §8).
+    """(9, 6) TCP poses of the test cube: P0 = nominal, P1..P8 = P0 + edge/2 * corner_signs (docs/conventions.md §8).
 
     Orientation: the case's ``platform_rpy_deg`` (the same at every point), as a rotation vector.
     """
@@ -115,7 +115,7 @@ def jacobian(case, legs: LegGeometry) -> np.ndarray:
 
 
 def condition_number(case, legs: LegGeometry) -> np.ndarray:
-    """(n,) cond(J_h), J_h = J diag(I3, I3 / L_char), L_char = R_p (CONVENTIONS.md §3)."""
+    """(n,) cond(J_h), J_h = J diag(I3, I3 / L_char), L_char = R_p (docs/conventions.md §3)."""
     J = jacobian(case, legs).copy()
     J[..., 3:] /= case.geometry.platform_radius_m
     sv = np.linalg.svd(J, compute_uv=False)

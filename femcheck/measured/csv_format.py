@@ -1,4 +1,4 @@
-"""Measured-data CSV: one row per dial reading (issue 7 item 1; CONVENTIONS.md §10).
+"""Measured-data CSV: one row per dial reading.
 
 Columns (header required, any order)::
 

@@ -1,4 +1,4 @@
-"""Parallel devices described leg by leg (issue 19): numeric inverse kinematics of any leg set, the general
+"""Parallel devices described leg by leg: numeric inverse kinematics of any leg set, the general
 compliance-chain model ``K_T = sum_i G_i^T K_i G_i`` and its beam FE, all from one ``parallel_device`` case.
 
 - :mod:`femcheck.parallel.device`: the legs as arrays (joint screws, links, joint laws) and the test points;

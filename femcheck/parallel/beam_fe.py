@@ -1,4 +1,4 @@
-"""Beam FE of a parallel device from its case description (issue 19 item 3, beam parts).
+"""Beam FE of a parallel device from its case description.
 
 Every link is meshed with 3D two-node beams (:mod:`femcheck.fe.beam`, Euler-Bernoulli unless the case asks
 for shear), split at the middle where a P joint sits in it. Each joint is a pair of nodes at its centre

@@ -1,6 +1,6 @@
 """Compiled (numba) path of the general parallel-device chain model: the same equations as
 :mod:`femcheck.parallel.leg_kinematics` and :mod:`femcheck.parallel.chain_model`, one pose and one leg at a time
-in machine code, on the flat arrays of :mod:`femcheck.parallel.kernel_tables` (issue 19 item 2).
+in machine code, on the flat arrays of :mod:`femcheck.parallel.kernel_tables`.
 
 Inverse kinematics (:func:`ik_kernel`), per leg and pose:
 

@@ -1,4 +1,4 @@
-"""General compliance-chain model of a parallel device, vectorized over poses (issue 19).
+"""General compliance-chain model of a parallel device, vectorized over poses.
 
 Every leg is a serial chain from the base to its platform attachment C_i. Each element's compliance is
 carried to C_i (frame U) and the elements of a leg add in series, as in the 6-PSU model:

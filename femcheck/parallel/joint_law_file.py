@@ -1,4 +1,4 @@
-"""Law files for the ``measured_law`` joint element of parallel devices (issue 19 item 1, docs/parallel_device.md).
+"""Law files for the ``measured_law`` joint element of parallel devices.
 
 Two kinds of file carry a joint's contact-FE law (SI, joint frame x, y lateral, z axial; rotations tilt, tilt,
 spin):

@@ -1,5 +1,5 @@
 """A :class:`~femcheck.parallel.device.ParallelDevice` compiled into flat arrays for the numba kernels of
-:mod:`femcheck.parallel.chain_kernel` (issue 19 item 2: one chain model for all devices at the 6-PSU kernel's speed).
+:mod:`femcheck.parallel.chain_kernel`.
 
 Every leg is padded to the largest leg of the device: ``nd`` freedoms, ``nc`` joint centres, ``nl`` links, and
 its joint laws. The element kinds index ``device.element_names`` (the columns of ``element_energy``);

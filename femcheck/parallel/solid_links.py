@@ -1,4 +1,4 @@
-"""Solid links of a parallel device: each link meshed by the parametric builders and condensed (issue 19 item 3).
+"""Solid links of a parallel device: each link meshed by the parametric builders and condensed.
 
 A ``tube`` link is the round tube of :mod:`geometry.proximal_link` (outer D, inner d; a solid rod when d = 0), a
 ``bar`` link the rectangular bar of :mod:`geometry.guideway` (``width_m`` along the section x axis, ``depth_m``

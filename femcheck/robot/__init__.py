@@ -1,2 +1,2 @@
 """Serial robots as kinematic trees: kinematics, self-weight elastics, the absolute-position measurement model
-and the self-weight diagnosis (issue 23)."""
+and the self-weight diagnosis."""

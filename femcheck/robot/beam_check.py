@@ -1,4 +1,4 @@
-"""Independent check of the self-weight elastics: a two-link arm as femcheck's FE beam model (issue 23 item 2).
+"""Independent check of the self-weight elastics: a two-link arm as femcheck's FE beam model.
 
 The arm (two links in a vertical plane, horizontal joint axes) is meshed with the 3D Euler-Bernoulli beam
 elements of :mod:`femcheck.fe.beam`; each joint is a pair of coincident nodes tied by a stiff penalty in five

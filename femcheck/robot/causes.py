@@ -1,4 +1,4 @@
-"""The serial cause vocabulary of the self-weight diagnosis (issue 23 item 4).
+"""The serial cause vocabulary of the self-weight diagnosis.
 
 Each cause is a direction in the flat elastic parameter space of :mod:`femcheck.robot.elastic` (an increment on
 the case's nominal springs, so a cause can *add* an element the model lacks, e.g. joint compliance to a rigid

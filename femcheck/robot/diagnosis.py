@@ -1,4 +1,4 @@
-"""Self-weight diagnosis of a serial robot (a kinematic tree) from measured absolute marker positions (issue 23).
+"""Self-weight diagnosis of a serial robot (a kinematic tree) from measured absolute marker positions.
 
 1. *Before*: the model as given (its nominal springs, rigid where none) with its nuisance parameters (sensor
    frame, marker offsets, geometry; :mod:`femcheck.robot.measurement_model`) calibrated by Gauss-Newton with the

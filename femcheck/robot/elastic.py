@@ -1,4 +1,4 @@
-"""Self-weight elastic equilibrium of a kinematic tree (issue 23 item 2).
+"""Self-weight elastic equilibrium of a kinematic tree.
 
 Springs (all lumped, linear unless stated):
 

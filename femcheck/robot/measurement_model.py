@@ -1,4 +1,4 @@
-"""Measurement model of absolute marker positions and its nuisance parameters (issue 23 item 3).
+"""Measurement model of absolute marker positions and its nuisance parameters.
 
 A reading is the marker position in the sensor frame::
 

@@ -1,4 +1,4 @@
-"""Measured absolute marker positions (issue 23 contract): the long-form CSV, one row per pose and marker.
+"""Measured absolute marker positions: the long-form CSV, one row per pose and marker.
 
 Columns: ``pose`` (label), ``marker`` (a name defined in the case), optional ``fold`` (integer), ``q1_rad`` ..
 ``qN_rad`` (the case's independent joints in order; a prismatic joint's column is ``qK_m``, metres), ``x_mm``, ``y_mm``, ``z_mm`` (in the sensor frame), optional

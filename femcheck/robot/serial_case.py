@@ -1,4 +1,4 @@
-"""Serial-robot cases load through the tree (issue 23 item 1): a ``serial_robot`` case (one DH chain, seed 002/003
+"""Serial-robot cases load through the tree: a ``serial_robot`` case (one DH chain, seed 002/003
 VJM springs) becomes a one-branch ``serial_tree`` case with a single marker ``tool`` at its tool point."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Generated robots and measured-position data with hidden effects (issue 23 item 6).
+"""Generated robots and measured-position data with hidden effects.
 
 Robots (case documents, so they go through the same validation as a user's file):
 

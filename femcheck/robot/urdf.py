@@ -1,4 +1,4 @@
-"""A URDF robot description as a ``serial_tree`` case document (issue 23: real robots come with a URDF).
+"""A URDF robot description as a ``serial_tree`` case document.
 
 URDF (ROS, http://wiki.ros.org/urdf/XML): links with inertials, joints with an origin (xyz, rpy: roll, pitch, yaw
 about fixed x, y, z), an axis in the joint frame, types ``revolute`` | ``continuous`` | ``prismatic`` | ``fixed``

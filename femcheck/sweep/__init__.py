@@ -1,6 +1,6 @@
 """Parameter sweeps of the analytical stiffness models: design of experiments, vectorized
 evaluation, a resumable Parquet store, local or Dask execution, sensitivity analysis and an HTML
-summary (issue 8; ``femcheck sweep``, docs/sweep.md).
+summary.
 
 Modules (one concept each): :mod:`~femcheck.sweep.parameters` (``KEY=LO:HI[:N|log]``),
 :mod:`~femcheck.sweep.design` (grid / LHS / Sobol'-Saltelli samples), :mod:`~femcheck.sweep.evaluate_analytical`

@@ -15,7 +15,7 @@ and ``k_min = min_d k_min,d``. From it:
   (``--design sobol``; estimators of Saltelli 2010 / Jansen 1999 via ``scipy.stats.sobol_indices``),
   or the exact first-order (main-effect) indices of a full factorial (``--design grid``:
   S_i = Var(E[Y | x_i]) / Var(Y) over the grid levels); an LHS design gives none;
-- element shares (CONVENTIONS.md §7) per sample, mean over points and load directions;
+- element shares (docs/conventions.md §7) per sample, mean over points and load directions;
 - the mass of the sized elements (``mass_kg``) against k_min, with its Pareto front (lighter and stiffer
   than every other sample).
 """

@@ -2,13 +2,13 @@
 
 For each sample (a parameter vector p) and test point P_j, and each load direction d of the case
 (``[loads] directions``), the chain model (:func:`femcheck.chain.evaluate`, seed 000 §4.1-4.4,
-CONVENTIONS.md §4-7) is evaluated under the wrench F d with F the model's test load
+docs/conventions.md §4-7) is evaluated under the wrench F d with F the model's test load
 (``loads.detailed_test_N`` for the detailed model, ``loads.simplified_test_N`` for the simplified one;
 the detailed model's Hertz contacts are linearized at that load). Stored per (sample, point):
 
 - ``k_<dir>_N_per_m = F / (d . t)``: the stiffness along d as the paper measures it (seed 000 eq. 1,
   K = P_T / delta), t = TCP twist (m, rad); ``defl_<dir>_m = d . t``;
-- ``share_<element>``: element shares of the deflection energy (CONVENTIONS.md §7), mean over the
+- ``share_<element>``: element shares of the deflection energy (docs/conventions.md §7), mean over the
   load directions (the §7 reference metric);
 - ``mass_kg``: the mass of the sized elements (:func:`element_mass_kg`), per sample;
 - ``ok``: False where the sample could not be evaluated (unreachable point, no convergence); its

@@ -14,7 +14,7 @@ read both alike:
   P_p, then P_p + P_T with P_T = ``loads.detailed_test_N``, δ = t(P_p + P_T) - t(P_p));
   ``defl_<dir>_m = δ``;
 - ``share_<element>``: the FE element shares of the incremental strain energy (order lg, act, sp,
-  prox, uj, as CONVENTIONS.md §7), mean over the load directions;
+  prox, uj, as docs/conventions.md §7), mean over the load directions;
 - ``mass_kg``: :func:`femcheck.sweep.evaluate_analytical.element_mass_kg` of the variant (the same
   closed form as the analytical sweep: it ranks designs, it is not an FE quantity);
 - ``ok``: False where the sample could not be evaluated (invalid variant, meshing failure, singular

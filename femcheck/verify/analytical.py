@@ -1,5 +1,5 @@
 """Analytical part of the verification: deflections of both model levels and both joint
-idealizations at the 9 test points under the paper's loads (seed 000 §4.1-4.4; CONVENTIONS.md §8-9).
+idealizations at the 9 test points under the paper's loads (seed 000 §4.1-4.4; docs/conventions.md §8-9).
 
 All numbers come from one vectorized evaluation per (level, joints, direction); tables are in SI
 here and converted to mm only by the writers.
@@ -50,7 +50,7 @@ class AnalyticalVerification:
 
     def simplified_vs_detailed(self, joints: str) -> dict[tuple[str, str], float]:
         """Relative error |d_simplified - d_detailed| / |d_detailed| per (point, direction), both at the
-        detailed test load (the simplified model is linear, so its deflection is scaled; CONVENTIONS.md §9)."""
+        detailed test load (the simplified model is linear, so its deflection is scaled; docs/conventions.md §9)."""
         out = {}
         for p in self.points:
             for d in self.directions:
@@ -60,7 +60,7 @@ class AnalyticalVerification:
         return out
 
     def mean_contributions(self, joints: str) -> dict[str, float]:
-        """Unweighted mean element shares over points x directions, detailed model (CONVENTIONS.md §7)."""
+        """Unweighted mean element shares over points x directions, detailed model (docs/conventions.md §7)."""
         c = np.array([r.contributions for r in self.rows if r.level == "detailed" and r.joints == joints])
         return {ELEMENT_NAMES[e]: float(v) for e, v in zip(ELEMENTS, c.mean(axis=0))}
 

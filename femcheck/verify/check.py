@@ -130,7 +130,7 @@ def followed_idealization(tabs: dict) -> str | None:
 
 
 #: the idealization the contact-joint FE is expected to follow, stated before it runs: joints that can turn
-#: (ball in seat, pins in bores) carry only their friction moment (CONVENTIONS.md §5, "A solid FE model with
+#: (ball in seat, pins in bores) carry only their friction moment (docs/conventions.md §5, "A solid FE model with
 #: real ball-in-seat and pin-in-bore contact ... should side with released")
 EXPECTED_CONTACT_IDEALIZATION = "released"
 

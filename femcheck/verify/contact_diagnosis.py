@@ -1,4 +1,4 @@
-"""The contact FE as a virtual experiment, diagnosed against the paper's rigid model (issue 7 acceptance).
+"""The contact FE as a virtual experiment, diagnosed against the paper's rigid model.
 
 ``femcheck verify`` (detailed level, all 9 points) turns its detailed FE with contact joints into the
 readings of the paper's protocol (:func:`femcheck.experiment.simulate.simulate` with

@@ -1,4 +1,4 @@
-"""Which joint idealization the contact FE follows, by how much, and why (issue 6, detailed level).
+"""Which joint idealization the contact FE follows, by how much, and why.
 
 Three measured pieces of evidence, all written into the verification report:
 

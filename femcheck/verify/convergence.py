@@ -1,4 +1,4 @@
-"""Mesh convergence of the device FE model at one test point (issue 6 acceptance).
+"""Mesh convergence of the device FE model at one test point.
 
 The FE deflections of every (level, joints, direction) are computed at the mesh levels ``coarse``,
 ``default``, ``fine`` (:mod:`femcheck.fe_device.mesh_levels`); the change from each level to the finest
@@ -22,7 +22,7 @@ def mesh_convergence(case, point: str = "P0", levels=("simplified", "detailed"),
     per mesh (sizes, DOFs, wall time). ``known`` {mesh level: FEVerification} reuses runs that contain ``point``
     (same mesh and model, so the same numbers). ``joint_laws``: the contact-FE joint laws, held fixed over the
     device mesh levels (this study refines the guideway and link meshes; the joints' own mesh convergence is
-    ``check-joints --mesh``, docs/joint_fe.md)."""
+    ``check-joints --mesh``, docs/verify.md)."""
     from femcheck.verify.fe import run_fe
     known = known or {}
     runs = {}

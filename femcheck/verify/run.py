@@ -239,8 +239,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         t_laws = time.perf_counter() - tc
     joint_results, t_joints = [], 0.0
     if levels and joint_fe and "detailed" in levels:
-        # the joint table (issue 14 part 3): contact FE of each passive joint at the coarse joint mesh
-        # (≈ 25 s, docs/joint_fe.md) vs its closed-form law
+        # the joint table: contact FE of each passive joint at the coarse joint mesh
+        # (≈ 25 s, docs/verify.md) vs its closed-form law
         from femcheck.fe_device.joint_check import check_joint
         from femcheck.fe_device.joint_fe import JOINTS as JOINT_TYPES
         tc = time.perf_counter()

@@ -1,4 +1,4 @@
-"""Library of model extensions: one module per physical effect (issue 7 item 4), behind a small registry.
+"""Library of model extensions: one module per physical effect, behind a small registry.
 
 Each module defines ``EFFECT``, an :class:`Effect` with its id (the vocabulary of the issue), parameters
 with bounds, an ``apply`` that changes a :class:`~femcheck.diagnose.model.WorkingState`, the location it

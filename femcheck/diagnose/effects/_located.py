@@ -1,4 +1,4 @@
-"""Compliance of one element type of the chain, changed in some legs only (issue 15 item 3: causes with a place).
+"""Compliance of one element type of the chain, changed in some legs only.
 
 The family behind the ``<element>_in_legs`` effects (one module per element type): element type e (guideway,
 actuation, spherical joint, proximal link, universal joint; seed 000 §4.4, ``femcheck.chain.ELEMENTS``) has, in leg

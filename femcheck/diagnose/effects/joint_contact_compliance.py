@@ -1,5 +1,5 @@
 """``joint_contact_compliance``: the passive joints (spherical joint at B_i: Hertz point contact; universal
-joint at C_i: pin line contact + simply supported pin, seed 000 §4.4.1, CONVENTIONS.md §5) are softer
+joint at C_i: pin line contact + simply supported pin, seed 000 §4.4.1, docs/conventions.md §5) are softer
 than modelled, or missing from the model (the simplified model of seed 000 has none).
 
 Parameter ``scale`` (-): the compliance of every S and U joint relative to the case's contact formulas,

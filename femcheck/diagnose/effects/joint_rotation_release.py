@@ -1,5 +1,5 @@
 """``joint_rotation_release``: the passive S and U joints carry less moment than the ``rigid`` idealization of
-the paper assumes (CONVENTIONS.md §5 "Joint idealization"). Each passive joint rotation gets a torsional
+the paper assumes (docs/conventions.md §5 "Joint idealization"). Each passive joint rotation gets a torsional
 spring of compliance c (rad/(N m)), an extra chain compliance ``c Jp Jp^T`` (seed 001's passive-joint
 elimination with springs instead of free joints): c = 0 is the paper's rigid model, c -> infinity the
 ``released`` model (two-force legs). Applies to a ``rigid`` base model only.

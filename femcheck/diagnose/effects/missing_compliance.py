@@ -1,9 +1,8 @@
-"""``missing_compliance``: the model omits the compliance of the drive and of the passive joints (issue 15 item 3:
-an effect that *adds* an element). The simplified model of seed 000 (guideways and proximal links only) against a
+"""``missing_compliance``: the model omits the compliance of the drive and of the passive joints. The simplified model of seed 000 (guideways and proximal links only) against a
 device whose actuation and joints are compliant: the paper's storyline (Table 2 -> Table 3).
 
 It adds, in every leg, the three elements the model level lacks, each with its own non-negative scale of the
-case's closed form (seed 000 §4.4, CONVENTIONS.md §5):
+case's closed form (seed 000 §4.4, docs/conventions.md §5):
 
     c_act,i = a * (cable E A / l in series with the motor K_rot / r^2)^-1          (``actuation_scale`` a >= 0)
     S_sp,i  = s * Hertz point contact of the ball in its seat, linearized at the reading's load

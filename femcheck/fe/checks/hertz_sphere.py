@@ -12,7 +12,7 @@ is the Hertz problem up to the truncation at L, and the refinement study converg
 ``geometry="sphere"`` instead maps the upper box's bottom face onto the sphere (the mesh carries the
 curvature, the gap comes from the geometry). That model is not the Hertz idealization: on the same meshes it
 is 1.1 / 0.6 / 0.4 % more compliant than the half-space model (coarse / default / fine) and still +0.35 %
-above Hertz at the fine level (measured; see docs/fe_contact.md), so it is kept as a variant, not as the check.
+above Hertz at the fine level (measured; see docs/fe_solver.md), so it is kept as a variant, not as the check.
 
 Far field. The truncation faces (x = L, y = L, z = ±L) carry the Boussinesq displacement of the point load F
 (Johnson eq. 3.21): its error against the Hertz pressure field is O(a²/L²); measured, imposing the exact
@@ -40,7 +40,7 @@ closed slave integration points (quarter) is reported as ``a_area_m``; ``a_m`` (
 radius of the outermost closed slave point, with the bracket [outermost closed, innermost open].
 The area estimate is biased low when the Gauss-point pressure oscillates and opens points inside the
 contact zone. Both are limited by the spacing of the slave points at the contact edge (the penalty also
-smears the edge over about one cell), so ``a_fit_m`` (issue 17) recovers the radius from the whole pressure
+smears the edge over about one cell), so ``a_fit_m`` recovers the radius from the whole pressure
 distribution: for the Hertz pressure p = p0 sqrt(1 − r²/a²) (Johnson eq. 4.20) the pressure-weighted mean
 square radius is ∫p r² dA / ∫p dA = 2a²/5, so a = sqrt(5/2 · Σ w p r² / Σ w p) over the slave integration
 points (weights w, :func:`hertz_radius_from_moments`). A second moment averages the Gauss-point pressure

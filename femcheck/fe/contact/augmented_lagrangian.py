@@ -1,4 +1,4 @@
-"""Augmented-Lagrangian (Uzawa) update of the contact multipliers (issue 5 item 4).
+"""Augmented-Lagrangian (Uzawa) update of the contact multipliers.
 
 A plain penalty leaves a penetration g = −p/ε that depends on the penalty ε (and with it the approach:
 4–35 % error on the Hertz case in an established solver). Uzawa's update, after each converged modified

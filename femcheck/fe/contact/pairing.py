@@ -1,6 +1,6 @@
 """Contact pairing: closest-point projection of slave integration points onto master facets.
 
-Gauss-point-to-surface (GPTS) contact (issue 5 item 4). The slave surface is sampled at the quadrature
+Gauss-point-to-surface (GPTS) contact. The slave surface is sampled at the quadrature
 points of its facets (triangle rule of order ``intorder``); each slave point x_s is projected once, in the
 reference configuration, onto the closest master facet (small sliding: the pairing is not updated).
 For slave point i with master point x_m, master outward unit normal n and tangents t1, t2 (n, t1, t2
