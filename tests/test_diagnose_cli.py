@@ -25,7 +25,12 @@ def test_diagnose_json_and_report(data, capsys):
     j = json.loads(out.read_text())
     assert [c["id"] for c in j["causes"]] == ["actuation_compliance"] and j["significant"] is True
     c = j["causes"][0]
-    assert set(c) == {"id", "probability", "location", "params", "params_ci", "on_bound"}
+    assert set(c) == {"id", "probability", "location", "params", "params_ci", "on_bound", "heldout_loss_pct"}
+    # one cause: leaving it out costs what it gained, the held-out error of the model as given minus the extended's
+    assert j["rank_by"] == "heldout_loss"
+    assert c["heldout_loss_pct"] == pytest.approx(100 * (j["heldout_error_before"]["overall"]
+                                                         - j["heldout_error_after"]["overall"]), rel=1e-9)
+    assert j["residual"]["sigma_estimated"] is True and "spread of the repeated trials" in j["residual"]["sigma_source"]
     assert j["verdict"] == "explained" and 0.5 < c["probability"] <= 1.0
     assert set(j["residual"]) >= {"chi2_per_dof", "p_value", "sigma_m", "unexplained_fraction"}
     assert c["params_ci"]["scale"][0] < 2.5 < c["params_ci"]["scale"][1]

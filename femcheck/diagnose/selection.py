@@ -72,10 +72,13 @@ class Cause:
     #: for a located cause (``<element>_in_legs``): the element type and the legs it sits in
     element: str = ""
     legs: tuple[int, ...] = ()
+    #: importance: the held-out mean relative deflection error (percentage points) that leaving this cause out of the
+    #: named explanation adds (:func:`heldout_losses`); 0 for ``none``
+    heldout_loss_pct: float = 0.0
 
     def as_dict(self) -> dict:
         out = {"id": self.id, "probability": self.probability, "location": self.location, "params": self.params,
-               "params_ci": self.params_ci, "on_bound": list(self.on_bound)}
+               "params_ci": self.params_ci, "on_bound": list(self.on_bound), "heldout_loss_pct": self.heldout_loss_pct}
         if self.element:
             out.update(element=self.element, legs=list(self.legs))
         return out
@@ -106,6 +109,8 @@ class Diagnosis:
     lack_of_fit: object = None
     #: further placements weighed alone and in pairs with the leading non-located singles (:func:`located_partners`)
     partner_placements: tuple = ()
+    #: named causes whose parameters the data cannot tell apart: (id, id, correlation) (:func:`collinear_causes`)
+    collinear: tuple = ()
 
     @property
     def verdict(self) -> str:
@@ -119,6 +124,7 @@ class Diagnosis:
         tot = max(float(z2.sum()), 1e-300)
         share = lambda keys: {str(k): float(z2[keys == k].sum() / tot) for k in dict.fromkeys(keys.tolist())}
         return {"chi2_per_dof": w.chi2_per_dof, "p_value": w.p_value, "sigma_m": float(r.reading_sigma_m),
+                "sigma_estimated": True, "sigma_source": sigma_source(r),
                 "unexplained_fraction": w.unexplained_fraction, "chi2": float(self.fit.chi2), "n_data": w.n_data,
                 "n_params": int(self.fit.n_params), "chi2_per_dof_none": w.chi2_per_dof_none,
                 "p_value_none": w.p_value_none, "chi2_share_by_point": share(np.asarray(r.point)),
@@ -180,8 +186,8 @@ class Diagnosis:
 
     def as_json(self) -> dict:
         w = self.weighing
-        return {"model": self.model_name, "verdict": w.verdict,
-                "causes": [c.as_dict() for c in self.causes],
+        return {"model": self.model_name, "verdict": w.verdict, "rank_by": "heldout_loss",
+                "causes": [c.as_dict() for c in self.causes], "collinear": [list(c) for c in self.collinear],
                 "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
                 "evidence": EVIDENCE_TEXT[w.method],
                 "likelihood": LIKELIHOOD_TEXT[w.likelihood], "sigma_dof": int(w.sigma_dof),
@@ -201,6 +207,15 @@ class Diagnosis:
                                 "screen_ebic_none": p.score_none, "t_per_leg": list(p.t)} for p in self.placements],
                 "partner_placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
                                         "screen_ebic_none": p.score_none} for p in self.partner_placements]}
+
+
+def sigma_source(readings) -> str:
+    """Where the reading sigma comes from, in words: never from an explanation being judged
+    (:mod:`femcheck.measured.protocol`)."""
+    if readings.sigma_dof > 0:
+        return f"estimate: spread of the repeated trials ({readings.sigma_dof} dof)"
+    return (f"estimate: dial step {readings.quantum_m * 1e6:.3g} um / sqrt(12), the readings repeating exactly "
+            f"(a floor: the scatter is below the step)")
 
 
 def point_folds(readings, n_folds: int = 3) -> tuple[tuple[str, ...], ...]:
@@ -468,6 +483,64 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     return new, out
 
 
+#: |correlation| between a parameter of one named cause and one of another beyond which the data determine only their
+#: combination: the two are not both named with confidence (their shared mass is split, :func:`share_collinear`)
+COLLINEAR = 0.95
+
+
+def collinear_causes(fit: FitResult, limit: float = COLLINEAR) -> list[tuple[str, str, float]]:
+    """(id_a, id_b, correlation) for each pair of causes of ``fit`` with a parameter pair correlated beyond ``limit``
+    (the largest |correlation| of the pair, from the fit's (J^T J)^-1; parameters on a bound do not count)."""
+    if fit.correlation is None or len(fit.effects) < 2:
+        return []
+    edges = np.cumsum([0] + [len(e.params) for e in fit.effects])
+    out = []
+    for i in range(len(fit.effects)):
+        for j in range(i + 1, len(fit.effects)):
+            block = fit.correlation[edges[i]:edges[i + 1], edges[j]:edges[j + 1]]
+            if np.isfinite(block).any():
+                c = block.flat[int(np.nanargmax(np.abs(block)))]
+                if abs(c) > limit:
+                    out.append((fit.effects[i].id, fit.effects[j].id, float(c)))
+    return out
+
+
+def share_collinear(marginals: dict, weighing: evidence.Weighing, collinear) -> dict:
+    """Cause marginals with the mass of the explanations holding *both* causes of a collinear pair split between them.
+
+    With the pair's parameters correlated beyond :data:`COLLINEAR` the data fix one combination: an explanation with
+    both says no more than "one of the two, or both", and the two explanations that carry the signal with one cause in
+    place of the other fit alike. Their mass is shared: each cause keeps the explanations it is in without the other,
+    plus half of those holding both. The two marginals then sum to at most 1, so they cannot both reach 0.9."""
+    out = dict(marginals)
+    for a, b, _ in collinear:
+        both = float(sum(p for ex, p in zip(weighing.explanations, weighing.probability) if a in ex.ids and b in ex.ids))
+        out[a] = max(out[a] - 0.5 * both, 0.0)
+        out[b] = max(out[b] - 0.5 * both, 0.0)
+    return out
+
+
+def heldout_losses(model, readings, chosen, fit: FitResult, cv: CrossValidation, cv_base: CrossValidation, folds,
+                   known=None) -> dict:
+    """{cause id: held-out mean relative deflection error lost (percentage points) when that cause is left out of the
+    named explanation ``chosen``}: the others refitted (warm start at their values in ``fit``) and cross-validated on
+    the same ``folds``, minus the named explanation's own held-out error ``cv``. The importance of a cause."""
+    known = known or {}
+    out = {}
+    for i, eff in enumerate(chosen):
+        others = [e for e in chosen if e is not eff]
+        if not others:
+            cv_without = cv_base
+        else:
+            f = known.get(frozenset(e.id for e in others))
+            if f is None or list(f.effects) != others:
+                start = np.concatenate([v for e, v in zip(chosen, fit.values) if e is not eff])
+                f = fit_effects(model, readings, others, starts=[start])
+            cv_without = cross_validate(model, readings, others, f, folds)
+        out[eff.id] = 100.0 * float(cv_without.error["overall"] - cv.error["overall"])
+    return out
+
+
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
              max_located: int = 1, evidence_method: str | None = None, likelihood: str | None = None,
@@ -615,11 +688,23 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     # over all its weighed placements)
     marg = {e.id: min(1.0, float(sum(p for ex, p in zip(w.explanations, w.probability) if e.id in ex.ids)))
             for e in chosen}
+    collinear = collinear_causes(cur_fit)
+    if collinear:
+        marg = share_collinear(marg, w, collinear)
+        pairs = "; ".join(f"{a} and {b} (parameter correlation {c:+.3f})" for a, b, c in collinear)
+        ids = ",".join(dict.fromkeys(x for a, b, _ in collinear for x in (a, b)))
+        w = dataclasses.replace(w, ambiguous=True, ambiguity=(
+            (w.ambiguity + "; " if w.ambiguity else "") + f"{pairs}: the data fix a combination, not each; their "
+            f"probability is shared. Measurements that separate them: femcheck plan CASE DATA.csv --effects {ids}"))
+    loss = heldout_losses(model, readings, chosen, cur_fit, cur_cv, cv_base, folds, known)
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
                          params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
                          on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")),
-                         element=getattr(e, "element", "") if e.located else "", legs=tuple(getattr(e, "legs", ())))
+                         element=getattr(e, "element", "") if e.located else "", legs=tuple(getattr(e, "legs", ())),
+                         heldout_loss_pct=loss[e.id])
                    for i, e in enumerate(chosen))
+    # importance order: the cause whose absence costs the most held-out error first
+    causes = tuple(sorted(causes, key=lambda c: -c.heldout_loss_pct))
     if not causes:
         causes = (Cause(id="none", location="", params={}, params_ci={}, probability=float(p_lead)),)
     base_err = None
@@ -634,4 +719,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
                      readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof,
-                     partner_placements=tuple(partners))
+                     partner_placements=tuple(partners), collinear=tuple(collinear))
