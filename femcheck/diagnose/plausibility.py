@@ -37,8 +37,11 @@ def scale_check(measured: np.ndarray, predicted: np.ndarray, limit: float = SCAL
     nothing to compare."""
     m = float(np.median(np.abs(np.asarray(measured, float))))
     p = float(np.median(np.abs(np.asarray(predicted, float))))
-    if not (m > 0 and p > 0):
+    if not p > 0:
         return float("nan"), None
+    if m == 0.0:   # rounded away: a value in m written in the mm column keeps no digit of a sub-mm deflection
+        return 0.0, (f"median measured deflection is 0 where the case predicts {p * 1e3:.4g} mm: readings look like "
+                     f"m written as mm (rounded to zero), or the dials were not read (--force diagnoses them anyway)")
     ratio = m / p
     if ratio > limit or ratio < 1.0 / limit:
         return ratio, (f"median measured deflection {m * 1e3:.4g} mm is {ratio:.3g}x the {p * 1e3:.4g} mm the case "
