@@ -154,3 +154,18 @@ def test_in_vocabulary_dial_data_are_explained(case, model, name, seed):
     j = diagnose(model, process(c.data, case), with_baseline=False).as_json()
     assert {x["id"] for x in j["causes"]} == want, (j["causes"], c.truth)
     assert j["verdict"] == "explained", (j["residual"]["chi2_per_dof"], j["residual"]["p_value"])
+
+
+def test_single_trial_sigma_comes_from_the_richest_rival(case, model):
+    """One reading per state: no scatter to pool, only the dial step's floor q/sqrt(12) = 2.9 um, well below the
+    6 um scatter. Sigma is estimated once, before the search, from the held-out residual of all candidates fitted
+    jointly (dof counted), and the verdict says so; the model as given then fits within that noise."""
+    c = dial_campaign(case, {}, seed=5, trials=1, scatter_m=6e-6)
+    j = diagnose(model, process(c.data, case), with_baseline=False,
+                 candidates=("friction_hysteresis", "link_modulus", "sensor_misalignment", "actuation_compliance")).as_json()
+    res = j["residual"]
+    true = np.sqrt(6e-6 ** 2 + 1e-5 ** 2 / 12)   # one rounded reading: scatter and rounding add
+    # ~370 dof: the estimate's relative standard error is ~4 %; 15 % is > 3 of them
+    assert res["sigma_m"] == pytest.approx(true, rel=0.15)
+    assert "most flexible rival" in res["sigma_source"] and j["sigma_dof"] == 3 * 126 - 6
+    assert j["verdict"] == "none"

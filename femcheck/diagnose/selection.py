@@ -111,6 +111,8 @@ class Diagnosis:
     partner_placements: tuple = ()
     #: named causes whose parameters the data cannot tell apart: (id, id, correlation) (:func:`collinear_causes`)
     collinear: tuple = ()
+    #: where sigma came from when no trial repeats (:func:`sigma_from_richest_rival`); "" when from the trials
+    sigma_note: str = ""
 
     @property
     def verdict(self) -> str:
@@ -124,7 +126,7 @@ class Diagnosis:
         tot = max(float(z2.sum()), 1e-300)
         share = lambda keys: {str(k): float(z2[keys == k].sum() / tot) for k in dict.fromkeys(keys.tolist())}
         return {"chi2_per_dof": w.chi2_per_dof, "p_value": w.p_value, "sigma_m": float(r.reading_sigma_m),
-                "sigma_estimated": True, "sigma_source": sigma_source(r),
+                "sigma_estimated": True, "sigma_source": sigma_source(r, self.sigma_note),
                 "unexplained_fraction": w.unexplained_fraction, "chi2": float(self.fit.chi2), "n_data": w.n_data,
                 "n_params": int(self.fit.n_params), "chi2_per_dof_none": w.chi2_per_dof_none,
                 "p_value_none": w.p_value_none, "chi2_share_by_point": share(np.asarray(r.point)),
@@ -209,13 +211,45 @@ class Diagnosis:
                                         "screen_ebic_none": p.score_none} for p in self.partner_placements]}
 
 
-def sigma_source(readings) -> str:
+def sigma_source(readings, rival_note: str = "") -> str:
     """Where the reading sigma comes from, in words: never from an explanation being judged
-    (:mod:`femcheck.measured.protocol`)."""
+    (:mod:`femcheck.measured.protocol`; ``rival_note``: :func:`sigma_from_richest_rival`'s, for single-trial data)."""
+    if rival_note:
+        return rival_note
     if readings.sigma_dof > 0:
         return f"estimate: spread of the repeated trials ({readings.sigma_dof} dof)"
     return (f"estimate: dial step {readings.quantum_m * 1e6:.3g} um / sqrt(12), the readings repeating exactly "
             f"(a floor: the scatter is below the step)")
+
+
+def sigma_from_richest_rival(model, readings, pool, folds):
+    """Readings with sigma estimated where no trial repeats (one reading per state: no scatter to pool, only the dial
+    step's floor): from the held-out residual of the most flexible rival, every non-located effect of ``pool`` fitted
+    jointly (k parameters), which no explanation being weighed can beat by much and none of them is judged by.
+
+    Leave-points-out residuals of a least-squares fit overstate the noise by the leverage, E r_ho,i^2 = sigma^2 /
+    (1 - h_ii), ~ sigma^2 N / (N - k) on average, so ``sigma^2 = RSS_ho (N - k) / N^2`` with N - k degrees of freedom.
+    A uniform sigma does not change a least-squares fit, so the rival is fitted once at the readings' floor sigma
+    and the estimate set before any explanation is searched. Returns (readings, note); the readings unchanged (and
+    note "") when trials repeat or the rival cannot be fitted."""
+    if readings.n_trials.max() > 1 or not pool:
+        return readings, ""
+    rich = fit_effects(model, readings, list(pool))
+    cv = cross_validate(model, readings, list(pool), rich, folds)
+    n = 3 * readings.n_states
+    k = int(rich.n_params)
+    if n - k < 3:
+        return readings, ""
+    rss = float(np.sum(((cv.states - readings.disp) / readings.sigma) ** 2))   # in units of the floor sigma
+    scale = float(np.sqrt(rss * (n - k) / n ** 2))
+    if not scale > 1.0:   # never below the dial step's floor
+        return readings, ""
+    out = dataclasses.replace(readings, sigma=readings.sigma * scale, delta_sigma=readings.delta_sigma * scale,
+                              reading_sigma_m=readings.reading_sigma_m * scale, sigma_dof=n - k)
+    note = (f"estimate: held-out residual of the most flexible rival ({'+'.join(rich.ids)}, {k} parameters; "
+            f"{n - k} dof), no repeated trials")
+    log.info("single trial: sigma %.3g m from %s", out.reading_sigma_m, note)
+    return out, note
 
 
 def point_folds(readings, n_folds: int = 3) -> tuple[tuple[str, ...], ...]:
@@ -568,11 +602,13 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     # the nonlinear leg choice refines the three linearly best element types (at least max_located): the linear
     # ranking at scale 1 can put the wrong type first when a leg is far from 1 (e.g. a near-rigid guideway); the
     # max_located best *refined* placements join the candidates
+    folds = point_folds(readings, n_folds)
+    # one reading per state: sigma from the richest rival, once, before the search (every fit below uses it)
+    readings, rival_note = sigma_from_richest_rival(model, readings, pool, folds)
     screened = (screen_placements(model, readings, located, keep=max(3, max_located))
                 if located and max_located > 0 else [])
     placements = screened[:max_located]
     pool += [p.effect for p in placements]
-    folds = point_folds(readings, n_folds)
     base = fit_effects(model, readings, [])
     cv_base = cross_validate(model, readings, [], base, folds)
     n_total = 3 * readings.n_states
@@ -719,4 +755,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
                      readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof,
-                     partner_placements=tuple(partners), collinear=tuple(collinear))
+                     partner_placements=tuple(partners), collinear=tuple(collinear), sigma_note=rival_note)
