@@ -482,10 +482,15 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
         if p.effect not in have and all(p.effect != q.effect for q in new):
             new.append(p)
     rescreened = []
-    for lead in leads:   # the located partner of a pair, placed on what the lead leaves
+    # the leg scales a screen on a lead's residual found: the start of that pair's fit (the placement's single fit,
+    # made without the lead, can be far off where the lead dominates the residual, e.g. friction)
+    partner_start = {}
+    for li, lead in enumerate(leads):   # the located partner of a pair, placed on what the lead leaves
         for p in screen_placements(model, readings, located, keep=3,
                                    background=(list(lead.effects), list(lead.values))):
             rescreened.append(p)
+            if p.values is not None:
+                partner_start.setdefault((li, p.effect), np.asarray(p.values, float))
             if p.effect not in have and all(p.effect != q.effect for q in new):
                 new.append(p)
     if siblings:
@@ -506,11 +511,14 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     for p in new:
         f = fit_effects(model, readings, [p.effect])
         out.append(_explanation(f))
-        for lead in leads:
+        for li, lead in enumerate(leads):
             # the lead first, as in the screen's background: a stage-1 lead that sets a whole element column (e.g.
             # actuation_compliance) is applied before the located scales of that column, not over them
-            start = np.concatenate([lead.values[0], f.values[0]])
-            fp = fit_effects(model, readings, [lead.effects[0], p.effect], starts=[start], max_nfev=100,
+            starts = [np.concatenate([lead.values[0], f.values[0]])]
+            if (li, p.effect) in partner_start:
+                starts.insert(0, np.concatenate([lead.values[0], partner_start[(li, p.effect)]]))
+            start = starts[0]
+            fp = fit_effects(model, readings, [lead.effects[0], p.effect], starts=starts, max_nfev=100,
                              stop_above=_hopeless_pair(best, len(start), prior, n_data, readings.sigma_dof),
                              nested_chi2=min(lead.chi2, f.chi2))
             out.append(_explanation(fp))
