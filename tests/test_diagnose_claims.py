@@ -169,3 +169,19 @@ def test_single_trial_sigma_comes_from_the_richest_rival(case, model):
     assert res["sigma_m"] == pytest.approx(true, rel=0.15)
     assert "most flexible rival" in res["sigma_source"] and j["sigma_dof"] == 3 * 126 - 6
     assert j["verdict"] == "none"
+
+
+def test_parallel_device_readings_off_scale_exit_2_and_force_goes_on(tmp_path, capsys):
+    """The same check on a general parallel device (the delta): micrometres in the mm columns stop it, --force runs."""
+    from femcheck.measured.csv_format import write_measured_csv
+    from femcheck.parallel.diagnosis import simulate as simulate_parallel
+    path = "cases/delta_3ruu.toml"
+    dev = femcheck.load_case(path).device
+    point, direction, trial, phase, load, force, disp = simulate_parallel(
+        femcheck.load_case(path), np.ones((dev.n_legs, len(dev.element_names))), noise_m=2e-7)
+    csv = tmp_path / "um_as_mm.csv"
+    write_measured_csv(csv, point, direction, trial, phase, load, force, disp * 1000.0, resolution_m=1e-7)
+    assert main(["diagnose", path, str(csv)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "µm written as mm" in err[0], err
+    assert main(["diagnose", path, str(csv), "--force", "--json", str(tmp_path / "d.json")]) == 0
