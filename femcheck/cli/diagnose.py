@@ -180,19 +180,20 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
         write_report(d, case, measured, report)
     con = console()
     res = result["residual"]
-    con.print(f"[bold]{case.meta.name}[/] vs {measured}: {data.n_poses} poses, {data.n_readings} marker readings; "
-              f"sigma {res['sigma_m'] * 1e3:.3f} mm ({d.sigma_source})")
+    con.print(f"[bold]{escape(case.meta.name)}[/] vs {escape(str(measured))}: {data.n_poses} poses, {data.n_readings} marker readings; "
+              f"sigma {res['sigma_m'] * 1e3:.3f} mm ({escape(d.sigma_source)})")
     con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}; model as given "
               f"{res['chi2_per_dof_none']:.2f}; unexplained fraction {res['unexplained_fraction']:.2f})")
     if result["ambiguous"]:
-        con.print(f"[yellow]ambiguous:[/] {result['ambiguity']}")
+        con.print(f"[yellow]ambiguous:[/] {escape(result['ambiguity'])}")
     t = Table(title="partial explanations (a significant residual remains)" if d.verdict == "unexplained" else
               "named causes" if d.verdict == "explained" else "no significant cause (none)")
     for h in ("cause", "probability", "where", "parameters (95 % interval)"):
         t.add_column(h)
     for c in result["causes"]:
-        t.add_row(c["id"], f"{c['probability']:.2f}", c["location"],
-                  "; ".join(f"{k} = {v:.4g} [{c['params_ci'][k][0]:.3g}, {c['params_ci'][k][1]:.3g}]" for k, v in c["params"].items()))
+        t.add_row(escape(c["id"]), f"{c['probability']:.2f}", escape(c["location"]),
+                  escape("; ".join(f"{k} = {v:.4g} [{c['params_ci'][k][0]:.3g}, {c['params_ci'][k][1]:.3g}]"
+                                   for k, v in c["params"].items())))
     con.print(t)
     e = Table(title=f"held-out marker error, mm ({result['heldout_folds']}-fold over poses)")
     for h in ("model", "mean", "median", "max"):
@@ -200,12 +201,12 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
     e.add_row("as given", *(f"{result[f'heldout_{k}_error_mm_before']:.3f}" for k in ("mean", "median", "max")))
     e.add_row("extended", *(f"{result[f'heldout_{k}_error_mm_after']:.3f}" for k in ("mean", "median", "max")))
     for l in result["leave_one_out"]:
-        e.add_row(f"without {l['id']}", f"{l['heldout_mean_error_mm']:.3f}", "", f"{l['heldout_max_error_mm']:.3f}")
+        e.add_row(f"without {escape(l['id'])}", f"{l['heldout_mean_error_mm']:.3f}", "", f"{l['heldout_max_error_mm']:.3f}")
     con.print(e)
     idf = result["identifiability"]
     con.print(f"nuisance: rank {idf['rank']}/{idf['n_params']}, condition {idf['condition_number']:.3g}, "
               f"{len(idf['fixed'])} fixed at nominal")
     for w in result["not_applicable"] + result["warnings"]:
-        con.print(f"[yellow]note:[/] {w}")
+        con.print(f"[yellow]note:[/] {escape(w)}")
     if report:
-        con.print(f"report: {Path(report) / 'report.html'}")
+        con.print(f"report: {escape(str(Path(report) / 'report.html'))}")
