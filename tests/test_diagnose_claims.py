@@ -8,7 +8,7 @@ import pytest
 
 import femcheck
 from femcheck.cli import main
-from femcheck.diagnose import AnalyticalChainModel, diagnose, predict_readings
+from femcheck.diagnose import diagnose, predict_readings
 from femcheck.diagnose import evidence
 from femcheck.diagnose.effects.link_modulus import LinkModulus
 from femcheck.diagnose.fitting import fit_effects
@@ -21,13 +21,8 @@ FAST = ("+x", "+y", "+z")
 
 
 @pytest.fixture(scope="module")
-def case():
-    return femcheck.load_case("cases/haptic_6psu.toml")
-
-
-@pytest.fixture(scope="module")
-def model(case):
-    return AnalyticalChainModel(case, "detailed", "rigid")
+def model(rigid_chain):
+    return rigid_chain
 
 
 def test_causes_come_in_order_of_heldout_loss(case, model):
