@@ -28,7 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from femcheck.chain import ChainAdjustments, ELEMENTS, evaluate
 from femcheck.experiment.simulate import protocol_rows
-from femcheck.measured.csv_format import MeasuredData, format_measured_csv, parse_measured_csv
+from femcheck.measured.csv_format import AXIS_DIRECTIONS, MeasuredData, format_measured_csv, parse_measured_csv
 from femcheck.measured.protocol import resolve_poses
 
 #: the causes this generator can hide, with the vocabulary id the diagnosis should name
@@ -77,7 +77,6 @@ def _deflecting_force(force, load, phase, point, direction, trial, friction_N: f
     nz = F > 0
     unit[nz] = force[nz] / F[nz, None]
     # unloaded to zero: the stuck deflection keeps the direction of the load it came from
-    from femcheck.measured.csv_format import AXIS_DIRECTIONS
     unit[~nz] = np.array([AXIS_DIRECTIONS[d] for d in direction[~nz]], float)
     return unit * eff[:, None]
 
