@@ -304,9 +304,12 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         peak[unl] = abs(data.load_N[order_t[0]])
     if not c_point and not np.any(data.phase == "sweep"):
         raise MeasuredDataError(data.source, None, "phase", "no (point, direction) has both preload and total readings")
-    # every state axis alike, those reading zero throughout too: their true value lies somewhere within half a step
-    # of zero, and without knowing where, b^2 + s^2 / n is what their rounding error may be
     state_sigma = np.repeat(mean_sigma(sigma_r, bias2, counts)[:, None], 3, 1)
+    if bias2 > 0.0 and pooled > 0.0:
+        # a state axis reading zero in every trial: a true value within a step of zero, mostly a symmetric or unloaded
+        # one, whose rounding error is not the shared b^2 of a value anywhere in a step; its mean has the scatter only
+        pinned = ~live
+        state_sigma[pinned] = np.broadcast_to(np.sqrt(pooled / counts)[:, None], (m, 3))[pinned]
     log.debug("%s: %d states, %d cases, reading sigma %.3g m", data.source, m, len(c_point), sigma_r)
     return Readings(
         source=data.source, pose=poses[first], force=data.force[first], load_N=data.load_N[first],
