@@ -30,6 +30,13 @@ def coarse_p0_fe_models(case):
 
 
 @pytest.fixture(scope="session")
+def rigid_chain(case):
+    """The reference case's detailed analytical chain with rigid joint rotations, as a diagnosis's reading model."""
+    from femcheck.diagnose import AnalyticalChainModel
+    return AnalyticalChainModel(case, "detailed", "rigid")
+
+
+@pytest.fixture(scope="session")
 def points(case):
     import femcheck
     return femcheck.test_points(case)

@@ -16,8 +16,12 @@ def data(tmp_path_factory):
     return d, csv
 
 
-def test_diagnose_json_and_report(data, capsys):
+def test_diagnose_json_and_report(data, capsys, monkeypatch):
     d, csv = data
+    # a warning that names a TOML table: console markup must print it, not swallow "[measurement]" as a style tag
+    import femcheck.diagnose.device_match as device_match
+    monkeypatch.setattr(device_match, "device_mismatch_warnings",
+                        lambda *a: ["dial step differs from [measurement] dial_resolution_m"])
     digest = hashlib.sha256(csv.read_bytes()).hexdigest()
     out, rep = d / "out.json", d / "report"
     assert main(["diagnose", "cases/haptic_6psu.toml", str(csv), "--model", "detailed", "--json", str(out),
@@ -25,7 +29,12 @@ def test_diagnose_json_and_report(data, capsys):
     j = json.loads(out.read_text())
     assert [c["id"] for c in j["causes"]] == ["actuation_compliance"] and j["significant"] is True
     c = j["causes"][0]
-    assert set(c) == {"id", "probability", "location", "params", "params_ci", "on_bound"}
+    assert set(c) == {"id", "probability", "location", "params", "params_ci", "on_bound", "heldout_loss_pct"}
+    # one cause: leaving it out costs what it gained, the held-out error of the model as given minus the extended's
+    assert j["rank_by"] == "heldout_loss"
+    assert c["heldout_loss_pct"] == pytest.approx(100 * (j["heldout_error_before"]["overall"]
+                                                         - j["heldout_error_after"]["overall"]), rel=1e-9)
+    assert j["residual"]["sigma_estimated"] is True and "spread of the repeated trials" in j["residual"]["sigma_source"]
     assert j["verdict"] == "explained" and 0.5 < c["probability"] <= 1.0
     assert set(j["residual"]) >= {"chi2_per_dof", "p_value", "sigma_m", "unexplained_fraction"}
     assert c["params_ci"]["scale"][0] < 2.5 < c["params_ci"]["scale"][1]
@@ -38,7 +47,9 @@ def test_diagnose_json_and_report(data, capsys):
     md = (rep / "report.md").read_text()
     assert "| Rel. error % | P0 |" in md and (rep / "residual_map.png").stat().st_size > 1000
     assert hashlib.sha256(csv.read_bytes()).hexdigest() == digest     # input never modified
-    assert "actuation_compliance" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "actuation_compliance" in out
+    assert "dial step differs from [measurement] dial_resolution_m" in " ".join(out.split())
 
 
 def test_diagnose_bad_csv_names_row_and_column(tmp_path, capsys):

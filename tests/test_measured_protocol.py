@@ -34,11 +34,35 @@ def test_uncertainty_pools_trial_scatter_and_resolution(case):
     r = process(parse_measured_csv(HEADER + rows), case)
     # the readings are whole multiples of 0.01 mm: that is the quantum seen in the data
     assert r.quantum_m == pytest.approx(1e-5, rel=1e-6)   # float gcd tolerance
-    # two trials: mean square successive difference, only dx of the preload state moves (0.02 mm) over
-    # 2 states x 3 axes: s^2 = (2e-5)^2 / (2 * 6); above the quantization floor q^2 / 12
-    assert r.reading_sigma_m == pytest.approx(np.sqrt(4e-10 / 12), rel=1e-9)   # float rounding
-    assert r.sigma_dof == 6
-    np.testing.assert_allclose(r.delta_sigma[0], np.sqrt(2) * r.reading_sigma_m / np.sqrt(2), rtol=1e-12)
+    # two trials: mean square successive difference over the state axes that read anything (dx of the two states;
+    # dy, dz read zero throughout and hide their scatter under the rounding), only the preload's dx moves (0.02 mm):
+    # s^2 = (2e-5)^2 / (2 * 2). The noise behind it is about one step, so the rounding error the trials share,
+    # b^2 ~ q^2 / (2 pi^2) exp(-4 pi^2), is negligible: sigma_r = s
+    assert r.reading_sigma_m == pytest.approx(1e-5, rel=1e-9)   # float rounding
+    assert r.sigma_dof == 2
+    np.testing.assert_allclose(r.delta_sigma[0], np.sqrt(2) * r.reading_sigma_m / np.sqrt(2), rtol=1e-9)
+
+
+def test_rounding_error_shared_by_the_trials_does_not_average_down(case):
+    """Readings that repeat exactly share their rounding error: the mean of three trials is as uncertain as one
+    reading (q / sqrt(12)), not q / sqrt(12 * 3); the axes that read zero throughout keep the (zero) scatter only."""
+    rows = "".join(f"P0,+x,{t},preload,5,5,0,0,0.091,0,0\nP0,+x,{t},total,20,20,0,0,0.356,0,0\n" for t in (1, 2, 3))
+    r = process(parse_measured_csv(HEADER + rows), case)
+    np.testing.assert_allclose(r.sigma[:, 0], 1e-6 / np.sqrt(12), rtol=1e-9)   # b^2(0, q) = q^2 / 12, series to 1e-12
+
+
+def test_quantization_bias_matches_a_direct_average():
+    """b^2(sigma, q) of the Fourier series against a direct average over the offset in the step and the noise."""
+    from scipy.stats import norm
+
+    from femcheck.measured.protocol import noise_sigma_from_scatter, quantization_bias_var
+    q, u, k = 1.0, np.linspace(0.0, 1.0, 4001)[:-1], np.arange(-30, 31)
+    for s in (0.1, 0.2, 0.3, 0.5):
+        p = norm.cdf((k[:, None] + 0.5 - u) / s) - norm.cdf((k[:, None] - 0.5 - u) / s)   # P(Q = k | u)
+        mean, second = (k[:, None] * p).sum(0), (k[:, None] ** 2 * p).sum(0)
+        b2, scatter = np.mean((mean - u) ** 2), np.mean(second - mean ** 2)
+        assert quantization_bias_var(s, q) == pytest.approx(b2, rel=1e-6, abs=1e-12)   # 4000-point offset grid
+        assert noise_sigma_from_scatter(scatter, q) == pytest.approx(s, rel=1e-5)   # bisection of the same relation
 
 
 def test_quantum_seen_in_the_data_sets_the_floor(case):

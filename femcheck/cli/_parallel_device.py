@@ -183,21 +183,35 @@ def _write_report(case, case_path, out, sections, checks, worst, solid, beam, me
     write_text_atomic(out / "report.html", render_html(title, intro, [head] + sections))
 
 
-def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out, extended_case=None) -> None:
-    """Which element kind, and which leg, the measured deflections put the model's error in."""
+def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_out, force: bool = False,
+             warnings=(), extended_case=None) -> None:
+    """Which element kind, and which leg, the measured deflections put the model's error in. ``force``: go on with
+    readings more than 10x off the model's scale; ``warnings``: lines about the case, kept in the JSON;
+    ``extended_case``: path of the corrected case to write."""
+    from rich.markup import escape
+
+    from femcheck.errors import MeasuredDataError
     from femcheck.measured.csv_format import read_measured_csv
     from femcheck.parallel.diagnosis import diagnose as run
+    from femcheck.parallel.diagnosis import readings_from, scale_problem
 
     if json_out and json_out != "-":
         from femcheck.report.atomic import refuse_input_overwrite
         refuse_input_overwrite(json_out, [case_path, measured])
     data = read_measured_csv(measured)
     try:
+        if not force:
+            problem = scale_problem(case, readings_from(case, data), model=model,
+                                    joints=joints or case.model.joint_rotations)
+            if problem:
+                raise MeasuredDataError(measured, None, "dx_mm..dz_mm", problem)
         d = run(case, data, model=model, joints=joints)
+    except MeasuredDataError:
+        raise
     except ValueError as exc:
         raise typer.BadParameter(str(exc)) from None
     result = {"case": case.source, "case_sha256": case.sha256, "measured": str(measured), "model": model,
-              "joints": joints or case.model.joint_rotations, **d.as_json()}
+              "joints": joints or case.model.joint_rotations, **d.as_json(), "warnings": list(warnings)}
     if extended_case:
         from pathlib import Path
         from femcheck.parallel.extended_case import extended_case_text
@@ -208,21 +222,21 @@ def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_
         if json_out == "-":
             return
     con = console()
-    t = Table(title=f"{case.meta.name}: candidate explanations of {measured} ({model} model, "
+    t = Table(title=f"{escape(case.meta.name)}: candidate explanations of {escape(str(measured))} ({model} model, "
                     f"{joints or case.model.joint_rotations} joints)")
     for c in ("candidate", "factors", "RMS before mm", "RMS after mm"):
         t.add_column(c, justify="right")
     for c in d.candidates:
-        t.add_row(c.what, str(len(c.factors)), f"{c.rms_before_mm:.5f}", f"{c.rms_after_mm:.5f}")
+        t.add_row(escape(c.what), str(len(c.factors)), f"{c.rms_before_mm:.5f}", f"{c.rms_after_mm:.5f}")
     con.print(t)
     b = d.best
-    con.print(f"kept (BIC): [bold]{b.what}[/]: " + ", ".join(f"{n} x{f:.3g}" for n, f in zip(b.names, b.factors)))
+    con.print(f"kept (BIC): [bold]{escape(b.what)}[/]: " + escape(", ".join(f"{n} x{f:.3g}" for n, f in zip(b.names, b.factors))))
     con.print(f"RMS {b.rms_before_mm:.5f} mm -> {b.rms_after_mm:.5f} mm; held out (leave one point out) "
               f"{b.held_out_rms_mm:.5f} mm")
     if not d.effects:
         con.print("no element's compliance moved beyond the threshold: the model explains the data")
     elif d.leg is not None:
-        con.print(f"effect located: [bold]{b.what.removesuffix(' by leg')}[/] of leg [bold]{d.leg[0]}[/] "
+        con.print(f"effect located: [bold]{escape(b.what.removesuffix(' by leg'))}[/] of leg [bold]{escape(d.leg[0])}[/] "
                   f"x{d.leg[1]:.3g} of its modelled compliance")
     else:
-        con.print("effect: " + ", ".join(f"[bold]{n}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")
+        con.print("effect: " + ", ".join(f"[bold]{escape(n)}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")

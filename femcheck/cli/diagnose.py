@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from femcheck.cli import console
@@ -44,6 +45,8 @@ def register(app: typer.Typer) -> None:
         poses: str = typer.Option(None, "--poses", metavar="POSES.csv",
                                   help="joint angles of the compensation table (columns q1_rad..qN_rad, optional "
                                        "pose and payload_kg)"),
+        force: bool = typer.Option(False, "--force", help="diagnose readings even when their median deflection is "
+                                   "more than 10x off the case's prediction (a unit slip, by default exit 2)"),
     ):
         """Residuals of the model against measured deflections, the physical causes (effect library), the
         fitted extension and the held-out error before/after (leave-points-out cross-validation)."""
@@ -65,14 +68,18 @@ def register(app: typer.Typer) -> None:
         case = load_case_for(case_path, "diagnose", kinds=("haptic_6psu", "serial_tree", "serial_robot", "parallel_device"))
         from femcheck.cli._extended_case import check_extended_outputs
         check_extended_outputs(case, case_path, measured, extended_case, compensation, poses)
+        from femcheck.case.plausibility import dimension_warnings
+        dim_warnings = dimension_warnings(case)
+        for w in dim_warnings:   # first: a unit slip in the case colours every line after it (stderr keeps --json - clean)
+            typer.echo(f"warning: {w}", err=True)
         if case.meta.kind in ("serial_tree", "serial_robot"):
             return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds,
                                     extended_case, compensation, poses)
         if case.meta.kind == "parallel_device":
             from femcheck.cli._parallel_device import diagnose as diagnose_parallel
             return diagnose_parallel(case, case_path, measured, model=model.value,
-                                     joints=joints.value if joints else None, json_out=json_out,
-                                     extended_case=extended_case)
+                                     joints=joints.value if joints else None, json_out=json_out, force=force,
+                                     warnings=dim_warnings, extended_case=extended_case)
         for out in ((json_out,) if json_out != "-" else ()) + \
                 ((str(Path(report) / "report.md"), str(Path(report) / "report.html")) if report else ()):
             if out:
@@ -84,7 +91,9 @@ def register(app: typer.Typer) -> None:
             table = read_pose_table(pose_table, case)
         readings = process(data, case, table)
         m = AnalyticalChainModel(case, model.value, joints.value if joints else case.model.joint_rotations)
-        mismatch = device_mismatch_warnings(case, data.meta, readings, m)
+        if not force:
+            _refuse_implausible_scale(m, readings, measured)
+        mismatch = dim_warnings + device_mismatch_warnings(case, data.meta, readings, m)
         from femcheck.cli import progress
         with progress("diagnose", None, stderr=json_out == "-") as bar:
             d = diagnose(m, readings, max_effects=max_effects, evidence_method=evidence, likelihood=likelihood,
@@ -107,21 +116,23 @@ def register(app: typer.Typer) -> None:
             from femcheck.diagnose.report import write_report
             write_report(d, readings, case, measured, report)
         con = console()
-        con.print(f"[bold]{case.meta.name}[/] vs {measured}: model [bold]{d.model_name}[/]; "
+        con.print(f"[bold]{escape(case.meta.name)}[/] vs {escape(str(measured))}: model [bold]{escape(d.model_name)}[/]; "
                   f"{readings.n_cases} cases, reading uncertainty {readings.reading_sigma_m * 1e6:.2f} um")
         res = result["residual"]
         con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}, "
-                  f"sigma {res['sigma_m'] * 1e6:.2f} um, unexplained fraction {res['unexplained_fraction']:.2f}; "
-                  f"residual shape: {', '.join(res['shape']['shape'])})")
+                  f"sigma {res['sigma_m'] * 1e6:.2f} um {escape(res['sigma_source'])}, unexplained fraction "
+                  f"{res['unexplained_fraction']:.2f}; residual shape: {', '.join(res['shape']['shape'])})")
         if d.weighing.ambiguous:
-            con.print(f"[yellow]ambiguous:[/] {d.weighing.ambiguity}")
+            con.print(f"[yellow]ambiguous:[/] {escape(d.weighing.ambiguity)}")
         t = Table(title="no significant cause (none)" if not d.significant else
-                  "partial explanations (a significant residual remains)" if d.verdict == "unexplained" else "named causes")
-        for h in ("cause", "probability", "location", "parameters (95 % interval)"):
+                  "partial explanations (a significant residual remains)" if d.verdict == "unexplained" else
+                  "named causes, most important first (held-out error lost without the cause)")
+        for h in ("cause", "probability", "held-out loss (% points)", "location", "parameters (95 % interval)"):
             t.add_column(h)
         for c in d.causes:
-            t.add_row(c.id, f"{c.probability:.2f}", c.location, "; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
-                                                 for k, v in c.params.items()))
+            t.add_row(escape(c.id), f"{c.probability:.2f}", f"{c.heldout_loss_pct:.1f}", escape(c.location),
+                      escape("; ".join(f"{k} = {v:.4g} [{c.params_ci[k][0]:.3g}, {c.params_ci[k][1]:.3g}]"
+                                       for k, v in c.params.items())))
         con.print(t)
         e = Table(title="held-out mean relative error of the deflection (%)")
         keys = list(d.heldout_error_before)
@@ -134,9 +145,27 @@ def register(app: typer.Typer) -> None:
             e.add_row("seed 001 weight fit", *[f"{100 * d.baseline_error.get(k, float('nan')):.1f}" for k in keys])
         con.print(e)
         for w in list(d.warnings) + mismatch:
-            con.print(f"[yellow]warning:[/] {w}")
+            con.print(f"[yellow]warning:[/] {escape(w)}")
         if report:
-            con.print(f"report: {Path(report) / 'report.html'}")
+            con.print(f"report: {escape(str(Path(report) / 'report.html'))}")
+
+
+def _refuse_implausible_scale(model, readings, measured) -> None:
+    """Exit 2 (one line naming the likely unit) when the measured eq. 1 deflections along the load are more than 10x
+    off, either way, the ones the case's model predicts (:func:`femcheck.diagnose.plausibility.scale_check`)."""
+    import numpy as np
+
+    from femcheck.diagnose import predict_readings
+    from femcheck.diagnose.plausibility import scale_check
+    from femcheck.errors import MeasuredDataError
+
+    if readings.n_cases == 0:
+        return
+    pred = predict_readings(model, readings)
+    along = lambda d: np.einsum("ij,ij->i", d, readings.case_unit)
+    _, problem = scale_check(along(readings.delta), along(pred[readings.total_state] - pred[readings.preload_state]))
+    if problem:
+        raise MeasuredDataError(measured, None, "dx_mm..dz_mm", problem)
 
 
 def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds, extended_case=None,
@@ -177,19 +206,20 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
         write_report(d, case, measured, report)
     con = console()
     res = result["residual"]
-    con.print(f"[bold]{case.meta.name}[/] vs {measured}: {data.n_poses} poses, {data.n_readings} marker readings; "
-              f"sigma {res['sigma_m'] * 1e3:.3f} mm ({d.sigma_source})")
+    con.print(f"[bold]{escape(case.meta.name)}[/] vs {escape(str(measured))}: {data.n_poses} poses, {data.n_readings} marker readings; "
+              f"sigma {res['sigma_m'] * 1e3:.3f} mm ({escape(d.sigma_source)})")
     con.print(f"verdict: [bold]{d.verdict}[/]  (chi2/dof {res['chi2_per_dof']:.2f}, p {res['p_value']:.2g}; model as given "
               f"{res['chi2_per_dof_none']:.2f}; unexplained fraction {res['unexplained_fraction']:.2f})")
     if result["ambiguous"]:
-        con.print(f"[yellow]ambiguous:[/] {result['ambiguity']}")
+        con.print(f"[yellow]ambiguous:[/] {escape(result['ambiguity'])}")
     t = Table(title="partial explanations (a significant residual remains)" if d.verdict == "unexplained" else
               "named causes" if d.verdict == "explained" else "no significant cause (none)")
     for h in ("cause", "probability", "where", "parameters (95 % interval)"):
         t.add_column(h)
     for c in result["causes"]:
-        t.add_row(c["id"], f"{c['probability']:.2f}", c["location"],
-                  "; ".join(f"{k} = {v:.4g} [{c['params_ci'][k][0]:.3g}, {c['params_ci'][k][1]:.3g}]" for k, v in c["params"].items()))
+        t.add_row(escape(c["id"]), f"{c['probability']:.2f}", escape(c["location"]),
+                  escape("; ".join(f"{k} = {v:.4g} [{c['params_ci'][k][0]:.3g}, {c['params_ci'][k][1]:.3g}]"
+                                   for k, v in c["params"].items())))
     con.print(t)
     e = Table(title=f"held-out marker error, mm ({result['heldout_folds']}-fold over poses)")
     for h in ("model", "mean", "median", "max"):
@@ -197,12 +227,12 @@ def _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, fold
     e.add_row("as given", *(f"{result[f'heldout_{k}_error_mm_before']:.3f}" for k in ("mean", "median", "max")))
     e.add_row("extended", *(f"{result[f'heldout_{k}_error_mm_after']:.3f}" for k in ("mean", "median", "max")))
     for l in result["leave_one_out"]:
-        e.add_row(f"without {l['id']}", f"{l['heldout_mean_error_mm']:.3f}", "", f"{l['heldout_max_error_mm']:.3f}")
+        e.add_row(f"without {escape(l['id'])}", f"{l['heldout_mean_error_mm']:.3f}", "", f"{l['heldout_max_error_mm']:.3f}")
     con.print(e)
     idf = result["identifiability"]
     con.print(f"nuisance: rank {idf['rank']}/{idf['n_params']}, condition {idf['condition_number']:.3g}, "
               f"{len(idf['fixed'])} fixed at nominal")
     for w in result["not_applicable"] + result["warnings"]:
-        con.print(f"[yellow]note:[/] {w}")
+        con.print(f"[yellow]note:[/] {escape(w)}")
     if report:
-        con.print(f"report: {Path(report) / 'report.html'}")
+        con.print(f"report: {escape(str(Path(report) / 'report.html'))}")

@@ -62,6 +62,9 @@ class FitResult:
     stopped_early: bool = False
     #: per start of a fit with ``stop_above``: what the early-stop rules saw (:class:`StopAudit`)
     stop_audit: tuple = dataclasses.field(default=(), repr=False, compare=False)
+    #: (k, k) correlation matrix of the parameters (scaled coordinates, from (J^T J)^-1 over the parameters off their
+    #: bounds; NaN for a parameter on its bound or not determined)
+    correlation: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def penalty(self) -> float:
@@ -332,6 +335,8 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
             warnings.append(f"{names[j]} = {vals[j]:.4g} is not identifiable from these data "
                             f"(95 % interval [{cil[j]:.3g}, {cih[j]:.3g}])")
     fi = np.flatnonzero(free & (sd_free > 0))
+    corr = np.full((k, k), np.nan)
+    corr[np.ix_(fi, fi)] = cov_free[np.ix_(fi, fi)] / np.outer(sd_free[fi], sd_free[fi])
     for ia, a in enumerate(fi):
         for b in fi[ia + 1:]:
             c = cov_free[a, b] / (sd_free[a] * sd_free[b])
@@ -361,4 +366,4 @@ def fit_effects(model, readings, effects, *, mask=None, starts=None, max_nfev: i
     return FitResult(effects, tuple(_split(vals, effects)), tuple(_split(cil, effects)), tuple(_split(cih, effects)),
                      chi2, n_data, k, tuple(warnings), pred, nfev, on_bound,
                      jacobian=np.asarray(J)[:, free] if mask.all() else None, occam=occam, stopped_early=stopped,
-                     occam_student=occam_student, stop_audit=tuple(audit))
+                     occam_student=occam_student, stop_audit=tuple(audit), correlation=corr)

@@ -64,6 +64,8 @@ class Placement:
     score: float
     score_none: float
     t: tuple[float, ...]
+    #: (k,) leg scales at the screen's optimum (the relinearized least squares on the background), a fit's start
+    values: tuple[float, ...] | None = None
 
 
 class _Background:
@@ -154,7 +156,8 @@ def _state(bg: _Background, eff, x):
 
 
 def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
-    """Forward selection of legs with relinearization (see module doc, step 5): (score, legs) of the best subset."""
+    """Forward selection of legs with relinearization (see module doc, step 5): ((score, legs), leg scales (6,)) of
+    the best subset."""
     x0 = bg.neutral(eff.column)
     x = x0.copy()
     r, G = _state(bg, eff, x)
@@ -190,7 +193,7 @@ def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
         if score >= best[0]:
             break
         best, best_x = (score, legs), x
-    return best
+    return best, best_x
 
 
 def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0,
@@ -230,9 +233,9 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
         # a linear minimum at all six legs is not an all-legs change: a leg scale far from 1 (a near-rigid element,
         # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward
         # selection decides, capped at five legs (six is the element's all-legs cause, weighed as its own effect)
-        score, legs = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        (score, legs), x = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
         if legs:
-            out.append(Placement(eff.restricted(legs), score, chi2_0, t_full))
+            out.append(Placement(eff.restricted(legs), score, chi2_0, t_full, tuple(float(x[i]) for i in legs)))
     out.sort(key=lambda p: p.score)
     return [p for p in out if p.score <= out[0].score + margin] if out else []
 

@@ -72,10 +72,13 @@ class Cause:
     #: for a located cause (``<element>_in_legs``): the element type and the legs it sits in
     element: str = ""
     legs: tuple[int, ...] = ()
+    #: importance: the held-out mean relative deflection error (percentage points) that leaving this cause out of the
+    #: named explanation adds (:func:`heldout_losses`); 0 for ``none``
+    heldout_loss_pct: float = 0.0
 
     def as_dict(self) -> dict:
         out = {"id": self.id, "probability": self.probability, "location": self.location, "params": self.params,
-               "params_ci": self.params_ci, "on_bound": list(self.on_bound)}
+               "params_ci": self.params_ci, "on_bound": list(self.on_bound), "heldout_loss_pct": self.heldout_loss_pct}
         if self.element:
             out.update(element=self.element, legs=list(self.legs))
         return out
@@ -106,6 +109,10 @@ class Diagnosis:
     lack_of_fit: object = None
     #: further placements weighed alone and in pairs with the leading non-located singles (:func:`located_partners`)
     partner_placements: tuple = ()
+    #: named causes whose parameters the data cannot tell apart: (id, id, correlation) (:func:`collinear_causes`)
+    collinear: tuple = ()
+    #: where sigma came from when no trial repeats (:func:`sigma_from_richest_rival`); "" when from the trials
+    sigma_note: str = ""
 
     @property
     def verdict(self) -> str:
@@ -119,6 +126,7 @@ class Diagnosis:
         tot = max(float(z2.sum()), 1e-300)
         share = lambda keys: {str(k): float(z2[keys == k].sum() / tot) for k in dict.fromkeys(keys.tolist())}
         return {"chi2_per_dof": w.chi2_per_dof, "p_value": w.p_value, "sigma_m": float(r.reading_sigma_m),
+                "sigma_estimated": True, "sigma_source": sigma_source(r, self.sigma_note),
                 "unexplained_fraction": w.unexplained_fraction, "chi2": float(self.fit.chi2), "n_data": w.n_data,
                 "n_params": int(self.fit.n_params), "chi2_per_dof_none": w.chi2_per_dof_none,
                 "p_value_none": w.p_value_none, "chi2_share_by_point": share(np.asarray(r.point)),
@@ -180,8 +188,8 @@ class Diagnosis:
 
     def as_json(self) -> dict:
         w = self.weighing
-        return {"model": self.model_name, "verdict": w.verdict,
-                "causes": [c.as_dict() for c in self.causes],
+        return {"model": self.model_name, "verdict": w.verdict, "rank_by": "heldout_loss",
+                "causes": [c.as_dict() for c in self.causes], "collinear": [list(c) for c in self.collinear],
                 "alternatives": w.alternatives(), "ambiguous": w.ambiguous, "ambiguity": w.ambiguity,
                 "evidence": EVIDENCE_TEXT[w.method],
                 "likelihood": LIKELIHOOD_TEXT[w.likelihood], "sigma_dof": int(w.sigma_dof),
@@ -201,6 +209,47 @@ class Diagnosis:
                                 "screen_ebic_none": p.score_none, "t_per_leg": list(p.t)} for p in self.placements],
                 "partner_placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
                                         "screen_ebic_none": p.score_none} for p in self.partner_placements]}
+
+
+def sigma_source(readings, rival_note: str = "") -> str:
+    """Where the reading sigma comes from, in words: never from an explanation being judged
+    (:mod:`femcheck.measured.protocol`; ``rival_note``: :func:`sigma_from_richest_rival`'s, for single-trial data)."""
+    if rival_note:
+        return rival_note
+    if readings.sigma_dof > 0:
+        return f"estimate: spread of the repeated trials ({readings.sigma_dof} dof)"
+    return (f"estimate: dial step {readings.quantum_m * 1e6:.3g} um / sqrt(12), the readings repeating exactly "
+            f"(a floor: the scatter is below the step)")
+
+
+def sigma_from_richest_rival(model, readings, pool, folds):
+    """Readings with sigma estimated where no trial repeats (one reading per state: no scatter to pool, only the dial
+    step's floor): from the held-out residual of the most flexible rival, every non-located effect of ``pool`` fitted
+    jointly (k parameters), which no explanation being weighed can beat by much and none of them is judged by.
+
+    Leave-points-out residuals of a least-squares fit overstate the noise by the leverage, E r_ho,i^2 = sigma^2 /
+    (1 - h_ii), ~ sigma^2 N / (N - k) on average, so ``sigma^2 = RSS_ho (N - k) / N^2`` with N - k degrees of freedom.
+    A uniform sigma does not change a least-squares fit, so the rival is fitted once at the readings' floor sigma
+    and the estimate set before any explanation is searched. Returns (readings, note); the readings unchanged (and
+    note "") when trials repeat or the rival cannot be fitted."""
+    if readings.n_trials.max() > 1 or not pool:
+        return readings, ""
+    rich = fit_effects(model, readings, list(pool))
+    cv = cross_validate(model, readings, list(pool), rich, folds)
+    n = 3 * readings.n_states
+    k = int(rich.n_params)
+    if n - k < 3:
+        return readings, ""
+    rss = float(np.sum(((cv.states - readings.disp) / readings.sigma) ** 2))   # in units of the floor sigma
+    scale = float(np.sqrt(rss * (n - k) / n ** 2))
+    if not scale > 1.0:   # never below the dial step's floor
+        return readings, ""
+    out = dataclasses.replace(readings, sigma=readings.sigma * scale, delta_sigma=readings.delta_sigma * scale,
+                              reading_sigma_m=readings.reading_sigma_m * scale, sigma_dof=n - k)
+    note = (f"estimate: held-out residual of the most flexible rival ({'+'.join(rich.ids)}, {k} parameters; "
+            f"{n - k} dof), no repeated trials")
+    log.info("single trial: sigma %.3g m from %s", out.reading_sigma_m, note)
+    return out, note
 
 
 def point_folds(readings, n_folds: int = 3) -> tuple[tuple[str, ...], ...]:
@@ -432,10 +481,15 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
         if p.effect not in have and all(p.effect != q.effect for q in new):
             new.append(p)
     rescreened = []
-    for lead in leads:   # the located partner of a pair, placed on what the lead leaves
+    # the leg scales a screen on a lead's residual found: the start of that pair's fit (the placement's single fit,
+    # made without the lead, can be far off where the lead dominates the residual, e.g. friction)
+    partner_start = {}
+    for li, lead in enumerate(leads):   # the located partner of a pair, placed on what the lead leaves
         for p in screen_placements(model, readings, located, keep=3,
                                    background=(list(lead.effects), list(lead.values))):
             rescreened.append(p)
+            if p.values is not None:
+                partner_start.setdefault((li, p.effect), np.asarray(p.values, float))
             if p.effect not in have and all(p.effect != q.effect for q in new):
                 new.append(p)
     if siblings:
@@ -456,11 +510,14 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     for p in new:
         f = fit_effects(model, readings, [p.effect])
         out.append(_explanation(f))
-        for lead in leads:
+        for li, lead in enumerate(leads):
             # the lead first, as in the screen's background: a stage-1 lead that sets a whole element column (e.g.
             # actuation_compliance) is applied before the located scales of that column, not over them
-            start = np.concatenate([lead.values[0], f.values[0]])
-            fp = fit_effects(model, readings, [lead.effects[0], p.effect], starts=[start], max_nfev=100,
+            starts = [np.concatenate([lead.values[0], f.values[0]])]
+            if (li, p.effect) in partner_start:
+                starts.insert(0, np.concatenate([lead.values[0], partner_start[(li, p.effect)]]))
+            start = starts[0]
+            fp = fit_effects(model, readings, [lead.effects[0], p.effect], starts=starts, max_nfev=100,
                              stop_above=_hopeless_pair(best, len(start), prior, n_data, readings.sigma_dof),
                              nested_chi2=min(lead.chi2, f.chi2))
             out.append(_explanation(fp))
@@ -489,6 +546,64 @@ def diagnosis_phases(n_pool: int, n_located: int, max_effects: int, n_folds: int
             + [("rivals", PHASE_S["rivals"] * n_pairs + eps),
                ("placements weighed", PHASE_S["placements weighed"] * located + eps),
                ("baseline", PHASE_S["baseline"] * n_folds if baseline else eps)])
+
+
+#: |correlation| between a parameter of one named cause and one of another beyond which the data determine only their
+#: combination: the two are not both named with confidence (their shared mass is split, :func:`share_collinear`)
+COLLINEAR = 0.95
+
+
+def collinear_causes(fit: FitResult, limit: float = COLLINEAR) -> list[tuple[str, str, float]]:
+    """(id_a, id_b, correlation) for each pair of causes of ``fit`` with a parameter pair correlated beyond ``limit``
+    (the largest |correlation| of the pair, from the fit's (J^T J)^-1; parameters on a bound do not count)."""
+    if fit.correlation is None or len(fit.effects) < 2:
+        return []
+    edges = np.cumsum([0] + [len(e.params) for e in fit.effects])
+    out = []
+    for i in range(len(fit.effects)):
+        for j in range(i + 1, len(fit.effects)):
+            block = fit.correlation[edges[i]:edges[i + 1], edges[j]:edges[j + 1]]
+            if np.isfinite(block).any():
+                c = block.flat[int(np.nanargmax(np.abs(block)))]
+                if abs(c) > limit:
+                    out.append((fit.effects[i].id, fit.effects[j].id, float(c)))
+    return out
+
+
+def share_collinear(marginals: dict, weighing: evidence.Weighing, collinear) -> dict:
+    """Cause marginals with the mass of the explanations holding *both* causes of a collinear pair split between them.
+
+    With the pair's parameters correlated beyond :data:`COLLINEAR` the data fix one combination: an explanation with
+    both says no more than "one of the two, or both", and the two explanations that carry the signal with one cause in
+    place of the other fit alike. Their mass is shared: each cause keeps the explanations it is in without the other,
+    plus half of those holding both. The two marginals then sum to at most 1, so they cannot both reach 0.9."""
+    out = dict(marginals)
+    for a, b, _ in collinear:
+        both = float(sum(p for ex, p in zip(weighing.explanations, weighing.probability) if a in ex.ids and b in ex.ids))
+        out[a] = max(out[a] - 0.5 * both, 0.0)
+        out[b] = max(out[b] - 0.5 * both, 0.0)
+    return out
+
+
+def heldout_losses(model, readings, chosen, fit: FitResult, cv: CrossValidation, cv_base: CrossValidation, folds,
+                   known=None) -> dict:
+    """{cause id: held-out mean relative deflection error lost (percentage points) when that cause is left out of the
+    named explanation ``chosen``}: the others refitted (warm start at their values in ``fit``) and cross-validated on
+    the same ``folds``, minus the named explanation's own held-out error ``cv``. The importance of a cause."""
+    known = known or {}
+    out = {}
+    for i, eff in enumerate(chosen):
+        others = [e for e in chosen if e is not eff]
+        if not others:
+            cv_without = cv_base
+        else:
+            f = known.get(frozenset(e.id for e in others))
+            if f is None or list(f.effects) != others:
+                start = np.concatenate([v for e, v in zip(chosen, fit.values) if e is not eff])
+                f = fit_effects(model, readings, others, starts=[start])
+            cv_without = cross_validate(model, readings, others, f, folds)
+        out[eff.id] = 100.0 * float(cv_without.error["overall"] - cv.error["overall"])
+    return out
 
 
 def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds: int = 3, shortlist: int = 2,
@@ -525,12 +640,14 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     # the nonlinear leg choice refines the three linearly best element types (at least max_located): the linear
     # ranking at scale 1 can put the wrong type first when a leg is far from 1 (e.g. a near-rigid guideway); the
     # max_located best *refined* placements join the candidates
+    folds = point_folds(readings, n_folds)
+    # one reading per state: sigma from the richest rival, once, before the search (every fit below uses it)
+    readings, rival_note = sigma_from_richest_rival(model, readings, pool, folds)
     screened = (screen_placements(model, readings, located, keep=max(3, max_located))
                 if located and max_located > 0 else [])
     placements = screened[:max_located]
     pool += [p.effect for p in placements]
     step("placements screened")
-    folds = point_folds(readings, n_folds)
     base = fit_effects(model, readings, [])
     cv_base = cross_validate(model, readings, [], base, folds)
     step("model as given fitted")
@@ -652,11 +769,23 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     # over all its weighed placements)
     marg = {e.id: min(1.0, float(sum(p for ex, p in zip(w.explanations, w.probability) if e.id in ex.ids)))
             for e in chosen}
+    collinear = collinear_causes(cur_fit)
+    if collinear:
+        marg = share_collinear(marg, w, collinear)
+        pairs = "; ".join(f"{a} and {b} (parameter correlation {c:+.3f})" for a, b, c in collinear)
+        ids = ",".join(dict.fromkeys(x for a, b, _ in collinear for x in (a, b)))
+        w = dataclasses.replace(w, ambiguous=True, ambiguity=(
+            (w.ambiguity + "; " if w.ambiguity else "") + f"{pairs}: the data fix a combination, not each; their "
+            f"probability is shared. Measurements that separate them: femcheck plan CASE DATA.csv --effects {ids}"))
+    loss = heldout_losses(model, readings, chosen, cur_fit, cur_cv, cv_base, folds, known)
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
                          params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
                          on_bound=tuple(n for n in cur_fit.on_bound if n.startswith(e.id + ".")),
-                         element=getattr(e, "element", "") if e.located else "", legs=tuple(getattr(e, "legs", ())))
+                         element=getattr(e, "element", "") if e.located else "", legs=tuple(getattr(e, "legs", ())),
+                         heldout_loss_pct=loss[e.id])
                    for i, e in enumerate(chosen))
+    # importance order: the cause whose absence costs the most held-out error first
+    causes = tuple(sorted(causes, key=lambda c: -c.heldout_loss_pct))
     if not causes:
         causes = (Cause(id="none", location="", params={}, params_ci={}, probability=float(p_lead)),)
     base_err = None
@@ -672,4 +801,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
                      readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof,
-                     partner_placements=tuple(partners))
+                     partner_placements=tuple(partners), collinear=tuple(collinear), sigma_note=rival_note)

@@ -15,10 +15,12 @@ multiple), or the case's dial resolution when the readings show none. The readin
 the trial scatter robustly against a trend over trial order: with three or more trials per state, the
 residuals of a straight line over trial order fitted per state and axis, pooled over their n - 2 degrees
 of freedom (a linear drift or creep is removed exactly); with two, von Neumann's mean square successive
-difference ``sigma^2 = sum (x_{t+1} - x_t)^2 / (2 n_diff)``. The scatter of quantized readings already contains the
-quantization, so ``sigma_r^2 = max(sigma_scatter^2, q^2 / 12)`` (the floor applies when the readings
-repeat exactly). A state averaged over n trials has sigma_r / sqrt(n), a deflection (difference of two
-readings) sqrt(2) sigma_r / sqrt(n). The trend itself is kept as a finding: ``trial_drift_m`` is the pooled
+difference ``sigma^2 = sum (x_{t+1} - x_t)^2 / (2 n_diff)``. The scatter of quantized readings contains only the
+part of the rounding error that varies from trial to trial; the rest, b^2 (:func:`quantization_bias_var`, q^2/12
+when the readings repeat exactly), is shared by all trials of a state. With a quantum seen in the data, one reading
+has ``sigma_r^2 = s^2 + b^2`` (s^2 the trial scatter) and a state averaged over n trials ``b^2 + s^2 / n``
+(:func:`mean_sigma`), not sigma_r^2 / n; a deflection (difference of two states) has twice that variance. Without a
+quantum in the data, ``sigma_r^2 = max(s^2, r^2 / 12)`` for the case's dial resolution r, averaging down as 1/n. The trend itself is kept as a finding: ``trial_drift_m`` is the pooled
 least-squares slope of the readings over trial order (m per trial) and ``trial_drift_sigma_m`` its standard
 error. ``sigma_dof`` is the number of degrees of freedom of the scatter estimate (0 when the quantization
 floor sets sigma): a goodness-of-fit test against it is an F test (lack of fit against pure error).
@@ -144,31 +146,35 @@ def reading_quantum(disp: np.ndarray, floor_m: float = 1e-8) -> float:
     return q if np.max(np.abs(v / q - np.round(v / q))) < 1e-4 else 0.0
 
 
-def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple[float, int, float, float]:
+def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray,
+                  live: np.ndarray | None = None) -> tuple[float, int, float, float]:
     """Robust pooled reading variance over states ``idx`` (r,) from successive differences in ``trial`` order
-    (module docstring): (variance m^2, number of differences, drift slope m / trial, its standard error)."""
+    (module docstring): (variance m^2, number of differences, drift slope m / trial, its standard error).
+    ``live`` (m, 3) bool: the state axes that enter the variance (default all)."""
     order = np.lexsort((trial, idx))
     i, t, x = idx[order], trial[order].astype(float), disp[order]
     m = int(i.max()) + 1 if i.size else 0
     cnt = np.bincount(i, minlength=m).astype(float)
+    use = np.ones((m, x.shape[1]), bool) if live is None else np.asarray(live, bool)
     if np.all(cnt[cnt > 0] >= 3) and np.any(cnt >= 3):
         # three or more trials per state: residuals of a straight line over trial order per state, so any
         # linear trend (drift, creep) is removed before the scatter is pooled (n - 2 dof per state)
         S0, S1, S2 = cnt, np.bincount(i, t, minlength=m), np.bincount(i, t * t, minlength=m)
         det = S0 * S2 - S1 ** 2
-        res2, n_diff = 0.0, int(np.sum(cnt[cnt > 0] - 2)) * x.shape[1]
+        res2, n_diff = 0.0, int(np.sum((np.maximum(cnt, 2) - 2)[:, None] * use))
         for ax in range(x.shape[1]):
             Sy, Sty = np.bincount(i, x[:, ax], minlength=m), np.bincount(i, t * x[:, ax], minlength=m)
             with np.errstate(invalid="ignore", divide="ignore"):
                 b = np.where(det > 0, (S0 * Sty - S1 * Sy) / det, 0.0)
                 a0 = np.where(cnt > 0, (Sy - b * S1) / np.maximum(cnt, 1), 0.0)
-            res2 += float(np.sum((x[:, ax] - a0[i] - b[i] * t) ** 2))
+            res2 += float(np.sum(((x[:, ax] - a0[i] - b[i] * t) ** 2)[use[i, ax]]))
         var = res2 / n_diff if n_diff else 0.0
     else:
         same = i[1:] == i[:-1]
         d = (x[1:] - x[:-1])[same]
-        n_diff = int(d.shape[0]) * x.shape[1]
-        var = float(np.sum(d ** 2) / (2 * n_diff)) if n_diff else 0.0
+        w = use[i[1:][same]]
+        n_diff = int(w.sum())
+        var = float(np.sum(d ** 2 * w) / (2 * n_diff)) if n_diff else 0.0
     # pooled slope over trial order: within-state centred trial number against centred reading
     tm = np.bincount(i, t, minlength=m) / np.maximum(cnt, 1)
     tc = t - tm[i]
@@ -183,6 +189,47 @@ def trial_scatter(idx: np.ndarray, trial: np.ndarray, disp: np.ndarray) -> tuple
         return var, n_diff, 0.0, 0.0
     slope = float(np.sum(tc[:, None] * xc * np.sign(xm[i]) * live) / stt)
     return var, n_diff, slope, float(np.sqrt(max(var, 1e-300) / stt))
+
+
+def quantization_bias_var(noise_sigma, quantum: float):
+    """Variance (m^2) of the rounding error that n repeated readings of one state share: a reading x + e (noise e ~
+    N(0, sigma^2)) rounded to the step q has the mean error E_e[Q(x + e)] - x, a sawtooth in x whose Fourier
+    harmonics the noise damps by exp(-2 pi^2 k^2 sigma^2 / q^2). Averaged over the state's position in the step
+    (uniform), its mean square is
+
+        b^2(sigma, q) = q^2 / (2 pi^2) sum_k exp(-4 pi^2 k^2 sigma^2 / q^2) / k^2,
+
+    q^2 / 12 at sigma = 0 (every trial reads the same step) and 0 for sigma >> q (dithered rounding; Widrow & Kollar,
+    Quantization Noise, 2008, ch. 5). It does not shrink with the number of trials."""
+    K = 4096
+    k = np.arange(1, K + 1)
+    z = np.asarray(noise_sigma, float)[..., None] / quantum
+    a = 4.0 * np.pi ** 2 * z ** 2
+    # the tail beyond K: exp(-a K^2) / (K + 1/2) (sum_{k>K} 1/k^2 = 1/(K + 1/2) + O(K^-3) at sigma = 0)
+    terms = np.sum(np.exp(-a * k ** 2) / k ** 2, axis=-1) + np.exp(-a[..., 0] * K ** 2) / (K + 0.5)
+    out = quantum ** 2 / (2.0 * np.pi ** 2) * terms
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def noise_sigma_from_scatter(scatter_var: float, quantum: float) -> float:
+    """The noise sigma (m) before rounding to ``quantum`` whose rounded readings scatter about their own mean with the
+    variance ``scatter_var`` (m^2): the within-state variance of rounded readings is sigma^2 + q^2/12 - b^2(sigma, q)
+    (:func:`quantization_bias_var`), increasing in sigma; solved by bisection. 0 when the readings repeat exactly."""
+    if scatter_var <= 0.0:
+        return 0.0
+    f = lambda s: s * s + quantum ** 2 / 12.0 - quantization_bias_var(s, quantum) - scatter_var
+    lo, hi = 0.0, float(np.sqrt(scatter_var)) + quantum
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if f(mid) < 0.0 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def mean_sigma(sigma_r: float, bias2: float, n_trials):
+    """Standard deviation (m) of the mean of ``n_trials`` readings of one state: the scatter part
+    sigma_r^2 - b^2 averages down with the trials, the rounding error they share (b^2) does not."""
+    n = np.asarray(n_trials, float)
+    return np.sqrt(bias2 + (sigma_r ** 2 - bias2) / n)
 
 
 def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None = None) -> Readings:
@@ -204,8 +251,18 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
     mean /= counts[:, None]
     q = reading_quantum(data.disp)
     quantum = q if 0.0 < q <= res * (1 + 1e-6) or res == 0.0 else res
-    pooled, n_scatter, drift, drift_sd = trial_scatter(idx, np.asarray(data.trial), data.disp)
+    # a state axis whose every trial reads zero sits within a dial step of zero, where rounding hides the scatter:
+    # pooled with the others it would pull the scatter of the readings that carry the deflection down
+    live = np.zeros((m, 3), bool)
+    np.logical_or.at(live, idx, data.disp != 0.0)
+    pooled, n_scatter, drift, drift_sd = trial_scatter(idx, np.asarray(data.trial), data.disp,
+                                                       live if q > 0.0 and live.any() else None)
     sigma_r = float(np.sqrt(max(pooled, quantum ** 2 / 12.0)))
+    # readings quantized to a step seen in the data: the part of the rounding error that the trials share
+    bias2 = 0.0
+    if q > 0.0:
+        bias2 = quantization_bias_var(noise_sigma_from_scatter(pooled, q), q)
+        sigma_r = float(np.sqrt(pooled + bias2))
     if sigma_r == 0.0:
         raise MeasuredDataError(data.source, None, None, "cannot estimate the reading uncertainty: a single trial and "
                                 "zero dial resolution")
@@ -239,7 +296,7 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         c_point.append(p); c_dir.append(d); c_unit.append(u); c_pose.append(poses[order_t[0]])
         c_pp.append(abs(data.load_N[order_p[0]])); c_pt.append(abs(data.load_N[order_t[0]]) - abs(data.load_N[order_p[0]]))
         c_delta.append(per_trial.mean(0))
-        c_dsig.append(np.full(3, np.sqrt(2.0) * sigma_r / np.sqrt(len(per_trial))))
+        c_dsig.append(np.full(3, np.sqrt(2.0) * mean_sigma(sigma_r, bias2, len(per_trial))))
         c_ps.append(idx[order_p[0]]); c_ts.append(idx[order_t[0]])
         sts = np.unique(idx[rows])
         state_case[sts] = ci
@@ -247,10 +304,16 @@ def process(data: MeasuredData, case, pose_table: dict[str, np.ndarray] | None =
         peak[unl] = abs(data.load_N[order_t[0]])
     if not c_point and not np.any(data.phase == "sweep"):
         raise MeasuredDataError(data.source, None, "phase", "no (point, direction) has both preload and total readings")
+    state_sigma = np.repeat(mean_sigma(sigma_r, bias2, counts)[:, None], 3, 1)
+    if bias2 > 0.0 and pooled > 0.0:
+        # a state axis reading zero in every trial: a true value within a step of zero, mostly a symmetric or unloaded
+        # one, whose rounding error is not the shared b^2 of a value anywhere in a step; its mean has the scatter only
+        pinned = ~live
+        state_sigma[pinned] = np.broadcast_to(np.sqrt(pooled / counts)[:, None], (m, 3))[pinned]
     log.debug("%s: %d states, %d cases, reading sigma %.3g m", data.source, m, len(c_point), sigma_r)
     return Readings(
         source=data.source, pose=poses[first], force=data.force[first], load_N=data.load_N[first],
-        phase=data.phase[first], peak_N=peak, disp=mean, sigma=np.repeat((sigma_r / np.sqrt(counts))[:, None], 3, 1),
+        phase=data.phase[first], peak_N=peak, disp=mean, sigma=state_sigma,
         n_trials=counts, point=data.point[first], direction=data.direction[first], case_index=state_case,
         case_point=np.array(c_point, dtype=object), case_direction=np.array(c_dir, dtype=object),
         case_unit=np.array(c_unit).reshape(-1, 3), case_pose=np.array(c_pose).reshape(-1, 6), preload_N=np.array(c_pp, float),

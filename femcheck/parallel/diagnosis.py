@@ -195,6 +195,17 @@ def diagnose(case, data, *, model: str = "detailed", joints: str | None = None,
                              scale_ci=(expand(th - 1.96 * se), expand(th + 1.96 * se)))
 
 
+def scale_problem(case, readings: Readings, *, model: str, joints: str) -> str | None:
+    """The unit slip the readings look like when their median deflection along the load is more than 10x off the
+    model's as given (:func:`femcheck.diagnose.plausibility.scale_check`), else None."""
+    from femcheck.diagnose.plausibility import scale_check
+    unit = readings.force / np.maximum(np.linalg.norm(readings.force, axis=1, keepdims=True), 1e-300)
+    pred = predict(case, readings, np.ones((case.device.n_legs, len(case.device.element_names))), model=model,
+                   joints=joints)
+    along = lambda d: np.einsum("ij,ij->i", d, unit)
+    return scale_check(along(readings.disp), along(pred))[1]
+
+
 def simulate(case, scale, *, points=POINT_LABELS, directions=None, model: str = "detailed", joints: str | None = None,
              noise_m: float = 0.0, seed: int = 0):
     """A virtual experiment: the model with element factors ``scale`` (L, E) as the 'true' device; returns the
