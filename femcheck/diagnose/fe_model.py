@@ -60,7 +60,7 @@ class DeviceFEReadingModel:
 
     def tcp_displacement(self, pose, force, element_scale, joint_rotation_compliance=0.0) -> np.ndarray:
         """(m, 3) TCP translation (m) under TCP forces ``force`` (m, 3) N at test-point poses (m, 6)."""
-        from femcheck.chain import device_parameters
+        from femcheck.fe_device.contact_scales import device_springs
         from femcheck.fe_device.joint_friction import joint_friction
         from femcheck.fe_device.device_model import actuation_at
         from femcheck.fe_device.loads import solve_state
@@ -68,7 +68,7 @@ class DeviceFEReadingModel:
             raise ValueError(f"{self.name} evaluates the nominal FE model only (no effect parameters)")
         pose, force = np.asarray(pose, float), np.asarray(force, float)
         labels = self._point_of(pose)
-        params = device_parameters(self.case)
+        params = device_springs(self.case)
         friction = self.friction or joint_friction(self.case)
         out = np.zeros((len(pose), 3))
         # one nonlinear device solve per distinct (point, force); a zero force reads zero
