@@ -229,6 +229,7 @@ def chain_kernel(hertz, cantilever, B, C, u, tcp, zP, slider, R_lg, e, params, s
     positive definite."""
     n = B.shape[0]
     S_L = np.zeros((6, 6))
+    S_P = np.zeros((6, 6))        # proximal link tip compliance (local), the same for the six legs of a pose
     S_tmp = np.zeros((6, 6))
     S_e = np.zeros((6, 5, 6, 6))
     RB = np.zeros((3, 3))
@@ -267,6 +268,8 @@ def chain_kernel(hertz, cantilever, B, C, u, tcp, zP, slider, R_lg, e, params, s
     for p in range(n):
         pr = params[p]
         W = wrench[p]
+        _cantilever(cantilever, pr[P_L2], pr[P_E_PR], pr[P_G_PR], pr[P_A_PR], pr[P_IX_PR], pr[P_IY_PR], pr[P_JT_PR],
+                    pr[P_KAPPA_PR], shear, S_P)
         for l in range(6):
             _cantilever(cantilever, slider[p, l], pr[P_E_LG], pr[P_G_LG], pr[P_A_LG], pr[P_IX_LG], pr[P_IY_LG], pr[P_JT_LG],
                         pr[P_KAPPA_LG], shear, S_L)
@@ -281,8 +284,7 @@ def chain_kernel(hertz, cantilever, B, C, u, tcp, zP, slider, R_lg, e, params, s
                 a[l, 0] = acc * scale[p, l, 0]
                 a[l, 1] = pr[P_C_ACT] * ue * ue * scale[p, l, 1]
                 a[l, 2] = 0.0
-                a[l, 3] = cantilever(pr[P_L2], pr[P_E_PR], pr[P_G_PR], pr[P_A_PR], pr[P_IX_PR], pr[P_IY_PR],
-                                     pr[P_JT_PR], pr[P_KAPPA_PR], shear)[6] * scale[p, l, 3]   # axial L / (E A)
+                a[l, 3] = S_P[2, 2] * scale[p, l, 3]   # the link's axial compliance L / (E A)
                 a[l, 4] = (pr[P_C_UC] + pr[P_C_UB]) * scale[p, l, 4]  # u^T R_B diag R_B^T u = c_uc + c_ub
                 g[l, 0], g[l, 1], g[l, 2] = u[p, l, 0], u[p, l, 1], u[p, l, 2]
                 rx, ry, rz = C[p, l, 0] - tcp[p, 0], C[p, l, 1] - tcp[p, 1], C[p, l, 2] - tcp[p, 2]
@@ -306,9 +308,7 @@ def chain_kernel(hertz, cantilever, B, C, u, tcp, zP, slider, R_lg, e, params, s
                     S_e[l, 1, i, j] = pr[P_C_ACT] * e[i] * e[j] * scale[p, l, 1]
                     S_e[l, 4, i, j] = (RB[i, 0] * RB[j, 0] * pr[P_C_UC] + RB[i, 1] * RB[j, 1] * pr[P_C_UC]
                                        + RB[i, 2] * RB[j, 2] * (pr[P_C_UC] + pr[P_C_UB])) * scale[p, l, 4]
-            _cantilever(cantilever, pr[P_L2], pr[P_E_PR], pr[P_G_PR], pr[P_A_PR], pr[P_IX_PR], pr[P_IY_PR], pr[P_JT_PR],
-                        pr[P_KAPPA_PR], shear, S_L)
-            _rotate(RB, S_L, S_e[l, 3], W6)
+            _rotate(RB, S_P, S_e[l, 3], W6)
             for i in range(6):
                 for j in range(6):
                     S_e[l, 3, i, j] *= scale[p, l, 3]
