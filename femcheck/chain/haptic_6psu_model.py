@@ -139,7 +139,9 @@ def _element_ingredients(case, legs: LegGeometry, p: DeviceParameters):
     uj_local = np.stack(np.broadcast_arrays(p.c_uc, p.c_uc, p.c_uc + p.c_ub), -1) * np.ones((n, 6, 1))
     S_uj_tt = np.einsum("nlij,nlj,nlkj->nlik", R_B, uj_local, R_B)
     c_act = np.broadcast_to(p.c_act, (n, 6))
-    prox_axial = p.L2 / (p.E_prox * p.prox_section.A) * np.ones((n, 6))
+    sec = p.prox_section   # the link's axial compliance L / (E A): S22 of the cantilever law
+    prox_axial = cantilever_beam.cantilever_terms(p.L2, p.E_prox, p.G_prox, sec.A, sec.Ix, sec.Iy, sec.Jt,
+                                                  sec.shear_factor, bool(p.beam_shear))[6] * np.ones((n, 6))
     return S_lg_B, S_uj_tt, c_act, prox_axial, R_B
 
 
