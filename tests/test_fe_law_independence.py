@@ -12,6 +12,7 @@ import pytest
 import femcheck
 import femcheck.chain
 from femcheck.compliance import actuation, cantilever_beam, hertz_line_contact, hertz_point_contact, sections
+from tests.test_kernel_laws import _cantilever_2x_softer, _hertz_3x_compliant
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "haptic_6psu.toml"
@@ -40,20 +41,7 @@ def fe_inputs(case) -> dict:
     return out
 
 
-# Each factory takes the module's law and returns the broken law. The compiled kernels call hertz_tangent_stiffness
-# and cantilever_terms, so their replacements are plain functions numba can compile (closures over the original).
-def _hertz_e_star(f):
-    def broken(F, E_star, R_star):     # k ~ E*^(2/3): E* x 3^-1.5 makes the contact 3x more compliant
-        return f(F, E_star * 3.0 ** -1.5, R_star)
-    return broken
-
-
-def _cantilever_softer(f):
-    def broken(L, E, G, A, Ix, Iy, Jt, shear_factor, shear):
-        return f(L, 0.5 * E, 0.5 * G, A, Ix, Iy, Jt, shear_factor, shear)
-    return broken
-
-
+# Each factory takes the module's law and returns the broken law (the kernels' two laws: as in test_kernel_laws)
 def _swapped(f):
     def broken(b, h):
         s = f(b, h)
@@ -72,12 +60,12 @@ def _e_star_through_device_parameters(f):
 MUTATIONS = {
     "cable 5x softer": (actuation, "cable_stiffness", lambda f: lambda E, d, l: f(0.2 * E, d, l)),
     "pin bending 10x softer": (hertz_line_contact, "pin_bending_stiffness", lambda f: lambda E, r, L: f(0.1 * E, r, L)),
-    "Hertz 3x compliant via E*": (hertz_point_contact, "hertz_tangent_stiffness", _hertz_e_star),
+    "Hertz 3x compliant via E*": (hertz_point_contact, "hertz_tangent_stiffness", _hertz_3x_compliant),
     "motor shaft 5x softer": (actuation, "motor_stiffness_at_cable", lambda f: lambda G, d, L, r: f(0.2 * G, d, L, r)),
     "guideway second moments swapped": (sections, "rectangle_section", _swapped),
     "E* of every contact 3x lower": (hertz_point_contact, "effective_modulus",
                                      lambda f: lambda E1, nu1, E2, nu2: f(E1 / 3.0, nu1, E2 / 3.0, nu2)),
-    "cantilever 2x softer": (cantilever_beam, "cantilever_terms", _cantilever_softer),
+    "cantilever 2x softer": (cantilever_beam, "cantilever_terms", _cantilever_2x_softer),
     "E* in device_parameters": (femcheck.chain, "device_parameters", _e_star_through_device_parameters),
 }
 
