@@ -69,6 +69,33 @@ class DeviceSprings:
             return float((d[1] - d[0]) / (F1 - F0))
         return self.c_uc + self.c_ub
 
+    def with_law_scale(self, element: str, factor: float) -> "DeviceSprings":
+        """These springs with the closed form of ``element`` ('act', 'sp', 'uj') ``factor`` times as compliant, as
+        ``[model.law_scale]`` scales the analytical law (Hertz through E*^(-3/2)). Only for the coverage, which asks
+        what the FE would show if the mistake were in a closed form the FE restates
+        (:func:`closed_form_elements`); the FE itself never reads ``[model.law_scale]``."""
+        if element == "act":
+            return dataclasses.replace(self, c_act=self.c_act * factor)
+        if element == "sp":
+            return dataclasses.replace(self, E_star_sp=self.E_star_sp * factor ** -1.5)
+        if element == "uj":
+            return dataclasses.replace(self, c_uc=self.c_uc * factor, c_ub=self.c_ub * factor)
+        raise ValueError(f"element {element!r}: the device FE has no closed form for it (expected act, sp or uj)")
+
+
+def closed_form_elements(case, joint_laws=None) -> frozenset:
+    """The chain elements ('act', 'sp', 'uj') that the detailed device FE models by a closed form of its own (the
+    same law restated from the materials, so a mistake in the law's form is not seen): the actuation unless
+    ``[actuation.fe] model = "elements"``, each joint without a contact-FE-measured law in ``joint_laws``."""
+    out = set()
+    if case.actuation.fe.model != "elements":
+        out.add("act")
+    if joint_laws is None or joint_laws.spherical is None:
+        out.add("sp")
+    if joint_laws is None or joint_laws.universal is None:
+        out.add("uj")
+    return frozenset(out)
+
 
 def device_springs(case) -> DeviceSprings:
     """The :class:`DeviceSprings` of a 6-PSU ``case`` from its materials and geometry (module doc)."""

@@ -131,18 +131,19 @@ class PointResult:
 
 
 def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, directions=None,
-                friction=None, joint_laws=None) -> PointResult:
+                friction=None, joint_laws=None, springs=None) -> PointResult:
     """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`).
 
     ``contact`` joints exist at the detailed level only; ``friction`` (:class:`.joint_friction.JointFriction`)
     defaults to the case's, with the theoretical tilt slip ratio 1; ``joint_laws``
-    (:class:`.joint_laws.JointLaws`): the contact-FE-measured joint laws (None: the closed forms).
+    (:class:`.joint_laws.JointLaws`): the contact-FE-measured joint laws (None: the closed forms); ``springs``: the
+    FE's closed-form springs (default :func:`.contact_scales.device_springs` of the case).
     """
     from femcheck.fe_device.contact_scales import device_springs
     from femcheck.fe_device.joint_friction import joint_friction
     t0 = time.perf_counter()
-    params = device_springs(case)   # the FE's own springs, never the analytical model's parameters
-    friction = friction or joint_friction(case)
+    params = springs or device_springs(case)   # the FE's own springs, never the analytical model's parameters
+    friction = friction or joint_friction(case, springs=params)
     directions = tuple(directions or case.loads.directions)
     k_act, K_lg = actuation_at(case, model)
     out: dict[tuple, LoadCaseResult] = {}
