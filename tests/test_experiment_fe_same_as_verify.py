@@ -25,12 +25,14 @@ def test_virtual_experiment_fe_pins_to_the_verify_fe():
     # the device FE as `verify --joint-fe` builds it (run_verify: contact_joint_inputs, then run_fe)
     cj = contact_joint_inputs(case, "coarse")
     fe = run_fe(case, ("P0",), ("detailed",), "coarse", kind="beam", friction=cj.friction, joint_laws=cj.joint_laws)
-    assert model.fe.friction.tilt_slip_ratio == cj.friction.tilt_slip_ratio
+    # the tilt study is solved afresh on each side; the contact solver repeats itself to ~1e-11 (measured 3e-12)
+    assert model.fe.friction.tilt_slip_ratio == pytest.approx(cj.friction.tilt_slip_ratio, rel=1e-9)
     L = case.loads
     P0 = femcheck.test_points(case)[0]
     for d in L.directions:
         u = direction_unit(d)
         forces = np.outer([L.detailed_preload_N, L.detailed_preload_N + L.detailed_test_N], u)
         r = model.tcp_displacement(np.tile(P0, (2, 1)), forces, model.base_scale)
-        # eq. 1 from two readings loaded from zero = verify's deflection (the same secant solves: to rounding)
+        # eq. 1 from two readings loaded from zero = verify's deflection (the same secant solves, the same joint
+        # laws; the slip ratio to ~1e-11)
         assert float((r[1] - r[0]) @ u) == pytest.approx(fe.deflection("P0", d, "detailed", "contact"), rel=1e-9)
