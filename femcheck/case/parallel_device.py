@@ -312,8 +312,15 @@ class ParallelDeviceCase(CaseRecord):
         return len(self.legs) * self.symmetry.copies
 
 
-@functools.lru_cache(maxsize=32)
 def _device(case):
+    from femcheck.compliance.kernel_laws import law_functions
+    return _device_for(case, law_functions())
+
+
+@functools.lru_cache(maxsize=32)
+def _device_for(case, laws):
+    """The device of ``case`` with the law functions ``laws`` (cached per case and laws: a law replaced in its
+    module builds the device again)."""
     from femcheck.parallel.device import device_from_case
     return device_from_case(case)
 

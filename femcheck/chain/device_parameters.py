@@ -11,8 +11,9 @@ import dataclasses
 
 import numpy as np
 
-from femcheck.compliance import (cable_stiffness, effective_modulus, effective_radius, line_contact_stiffness,
-                                 motor_stiffness_at_cable, pin_bending_stiffness, rectangle_section, tube_section)
+# the laws are called through their modules (``actuation.cable_stiffness``, ...), so that the function a module
+# holds when the parameters are derived is the one used: each law has one implementation, in its module
+from femcheck.compliance import actuation, hertz_line_contact, hertz_point_contact, sections
 from femcheck.compliance.sections import Section
 
 #: case keys that change the kinematics: they need a case variant, not an array override
@@ -87,30 +88,32 @@ def device_parameters(case, overrides: dict[str, np.ndarray] | None = None) -> D
     Es, nus, _ = material(sj.seat_material)
     Ep, nup, _ = material(uj.pin_material)
     Eo, nuo, _ = material(uj.bore_material)
-    k_cable = cable_stiffness(get("actuation.cable_modulus_Pa", act.cable_modulus_Pa),
-                              get("actuation.cable_diameter_m", act.cable_diameter_m),
-                              get("actuation.cable_length_m", act.cable_length_m))
-    k_motor = motor_stiffness_at_cable(get("actuation.shaft_G_Pa", act.shaft_G_Pa),
-                                       get("actuation.shaft_diameter_m", act.shaft_diameter_m),
-                                       get("actuation.shaft_length_m", act.shaft_length_m),
-                                       get("actuation.capstan_radius_m", act.capstan_radius_m))
+    k_cable = actuation.cable_stiffness(get("actuation.cable_modulus_Pa", act.cable_modulus_Pa),
+                                        get("actuation.cable_diameter_m", act.cable_diameter_m),
+                                        get("actuation.cable_length_m", act.cable_length_m))
+    k_motor = actuation.motor_stiffness_at_cable(get("actuation.shaft_G_Pa", act.shaft_G_Pa),
+                                                 get("actuation.shaft_diameter_m", act.shaft_diameter_m),
+                                                 get("actuation.shaft_length_m", act.shaft_length_m),
+                                                 get("actuation.capstan_radius_m", act.capstan_radius_m))
     params = DeviceParameters(
         E_lg=E_lg / law.lg, G_lg=G_lg / law.lg,
-        lg_section=rectangle_section(get("guideway.width_radial_m", gw.width_radial_m),
-                                     get("guideway.depth_tangential_m", gw.depth_tangential_m)),
+        lg_section=sections.rectangle_section(get("guideway.width_radial_m", gw.width_radial_m),
+                                              get("guideway.depth_tangential_m", gw.depth_tangential_m)),
         E_prox=E_pr / law.prox, G_prox=G_pr / law.prox,
-        prox_section=tube_section(get("proximal_link.outer_diameter_m", pl.outer_diameter_m),
-                                  get("proximal_link.inner_diameter_m", pl.inner_diameter_m)),
+        prox_section=sections.tube_section(get("proximal_link.outer_diameter_m", pl.outer_diameter_m),
+                                           get("proximal_link.inner_diameter_m", pl.inner_diameter_m)),
         L2=case.geometry.proximal_link_length_m,
         c_act=(1.0 / k_cable + 1.0 / k_motor) * law.act,
-        E_star_sp=effective_modulus(Eb, nub, Es, nus) * law.sp ** -1.5,
-        R_star_sp=effective_radius(get("spherical_joint.ball_radius_m", sj.ball_radius_m),
-                                   get("spherical_joint.seat_curvature_1_per_m", sj.seat_curvature_1_per_m)),
+        E_star_sp=hertz_point_contact.effective_modulus(Eb, nub, Es, nus) * law.sp ** -1.5,
+        R_star_sp=hertz_point_contact.effective_radius(
+            get("spherical_joint.ball_radius_m", sj.ball_radius_m),
+            get("spherical_joint.seat_curvature_1_per_m", sj.seat_curvature_1_per_m)),
         F_min_sp=get("spherical_joint.min_contact_force_N", sj.min_contact_force_N),
-        c_uc=law.uj / line_contact_stiffness(get("universal_joint.contact_length_m", uj.contact_length_m),
-                                             effective_modulus(Ep, nup, Eo, nuo)),
-        c_ub=law.uj / pin_bending_stiffness(Ep, get("universal_joint.pin_radius_m", uj.pin_radius_m),
-                                            get("universal_joint.pin_span_m", uj.pin_span_m)),
+        c_uc=law.uj / hertz_line_contact.line_contact_stiffness(
+            get("universal_joint.contact_length_m", uj.contact_length_m),
+            hertz_point_contact.effective_modulus(Ep, nup, Eo, nuo)),
+        c_ub=law.uj / hertz_line_contact.pin_bending_stiffness(
+            Ep, get("universal_joint.pin_radius_m", uj.pin_radius_m), get("universal_joint.pin_span_m", uj.pin_span_m)),
         beam_shear=case.model.beam_shear,
     )
     unused = sorted(set(overrides) - used)

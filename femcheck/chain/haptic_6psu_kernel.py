@@ -6,6 +6,11 @@ poses; numpy's per-call overhead on 6x6 matrices makes the readable vectorized m
 for that. The tests require both paths to agree to 1e-10 relative, so the numpy model stays the
 reference transcription of the equations and this kernel only has to be fast.
 
+The element laws are not repeated here: the Hertz tangent stiffness and the cantilever tip compliance are the
+functions of :mod:`femcheck.compliance` (``hertz_tangent_stiffness``, ``cantilever_terms``), passed in as
+compiled first-class functions (:func:`femcheck.compliance.kernel_laws.kernel_laws`); the other laws arrive as
+the per-pose parameters of :func:`femcheck.chain.device_parameters`.
+
 The Hertz fixed point uses Woodbury's identity so that an iteration never inverts a 6x6 matrix:
 ``(S_fixed + c P P^T)^-1 = M - M P c (I + c P^T M P)^-1 P^T M`` with ``M = S_fixed^-1`` and
 ``P = [I3; 0]`` (the spherical joint compliance is an isotropic translation).
@@ -102,19 +107,20 @@ def _matmul(A, B, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _cantilever(L, E, G, A, Ix, Iy, Jt, kappa, shear, S):
+def _cantilever(law, L, E, G, A, Ix, Iy, Jt, kappa, shear, S):
+    """S (6, 6): the tip compliance whose entries the cantilever ``law`` gives (kernel_laws)."""
     for i in range(6):
         for j in range(6):
             S[i, j] = 0.0
-    lat = L / (kappa * G * A) if shear else 0.0
-    S[0, 0] = L**3 / (3.0 * E * Iy) + lat
-    S[0, 4] = S[4, 0] = L**2 / (2.0 * E * Iy)
-    S[4, 4] = L / (E * Iy)
-    S[1, 1] = L**3 / (3.0 * E * Ix) + lat
-    S[1, 3] = S[3, 1] = -(L**2) / (2.0 * E * Ix)
-    S[3, 3] = L / (E * Ix)
-    S[2, 2] = L / (E * A)
-    S[5, 5] = L / (G * Jt)
+    s00, s04, s44, s11, s13, s33, s22, s55 = law(L, E, G, A, Ix, Iy, Jt, kappa, shear)
+    S[0, 0] = s00
+    S[0, 4] = S[4, 0] = s04
+    S[4, 4] = s44
+    S[1, 1] = s11
+    S[1, 3] = S[3, 1] = s13
+    S[3, 3] = s33
+    S[2, 2] = s22
+    S[5, 5] = s55
 
 
 @njit(cache=True, error_model="numpy")
@@ -195,10 +201,11 @@ def _link_frame(u, R):
 
 
 @njit(cache=True, error_model="numpy")
-def _hertz_k(F, Estar, Rstar, Fmin):
+def _hertz_k(law, F, Estar, Rstar, Fmin):
+    """The Hertz ``law`` (kernel_laws) at the force F floored at the linearization floor Fmin."""
     if F < Fmin:
         F = Fmin
-    return (6.0 * Estar * Estar * Rstar * F) ** (1.0 / 3.0)
+    return law(F, Estar, Rstar)
 
 
 @njit(cache=True, error_model="numpy")
@@ -212,15 +219,17 @@ def _released_leg_force(a_l, csp_l, g_l, t):
 
 
 @njit(cache=True, error_model="numpy")
-def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, released, sp_present, shear, c_rot,
-                 K_out, t_out, Wc_out, ksp_out, energy_out, iters_out):
-    """Evaluate n poses. Shapes: B, C, u (n, 6, 3); tcp, zP (n, 3); slider (n, 6); R_lg (6, 3, 3); e (3,);
+def chain_kernel(hertz, cantilever, B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, released, sp_present,
+                 shear, c_rot, K_out, t_out, Wc_out, ksp_out, energy_out, iters_out):
+    """Evaluate n poses with the Hertz and cantilever laws ``hertz``, ``cantilever``
+    (:func:`femcheck.compliance.kernel_laws.kernel_laws`). Shapes: B, C, u (n, 6, 3); tcp, zP (n, 3); slider (n, 6); R_lg (6, 3, 3); e (3,);
     params (n, N_PARAMS); scale (n, 6, 5); wrench (n, 6). Outputs K_out (n, 6, 6), t_out (n, 6),
     Wc_out (n, 6, 6), ksp_out (n, 6), energy_out (n, 6, 5), iters_out (n,). Returns 0; 1 + p if the
     fixed point of pose p did not converge; -1 - p if a chain or platform matrix of pose p is not
     positive definite."""
     n = B.shape[0]
     S_L = np.zeros((6, 6))
+    S_P = np.zeros((6, 6))        # proximal link tip compliance (local), the same for the six legs of a pose
     S_tmp = np.zeros((6, 6))
     S_e = np.zeros((6, 5, 6, 6))
     RB = np.zeros((3, 3))
@@ -259,8 +268,10 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
     for p in range(n):
         pr = params[p]
         W = wrench[p]
+        _cantilever(cantilever, pr[P_L2], pr[P_E_PR], pr[P_G_PR], pr[P_A_PR], pr[P_IX_PR], pr[P_IY_PR], pr[P_JT_PR],
+                    pr[P_KAPPA_PR], shear, S_P)
         for l in range(6):
-            _cantilever(slider[p, l], pr[P_E_LG], pr[P_G_LG], pr[P_A_LG], pr[P_IX_LG], pr[P_IY_LG], pr[P_JT_LG],
+            _cantilever(cantilever, slider[p, l], pr[P_E_LG], pr[P_G_LG], pr[P_A_LG], pr[P_IX_LG], pr[P_IY_LG], pr[P_JT_LG],
                         pr[P_KAPPA_LG], shear, S_L)
             _rotate(R_lg[l], S_L, S_tmp, W6)            # guideway tip compliance at B_i, frame U
             _link_frame(u[p, l], RB)
@@ -273,7 +284,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
                 a[l, 0] = acc * scale[p, l, 0]
                 a[l, 1] = pr[P_C_ACT] * ue * ue * scale[p, l, 1]
                 a[l, 2] = 0.0
-                a[l, 3] = pr[P_L2] / (pr[P_E_PR] * pr[P_A_PR]) * scale[p, l, 3]
+                a[l, 3] = S_P[2, 2] * scale[p, l, 3]   # the link's axial compliance L / (E A)
                 a[l, 4] = (pr[P_C_UC] + pr[P_C_UB]) * scale[p, l, 4]  # u^T R_B diag R_B^T u = c_uc + c_ub
                 g[l, 0], g[l, 1], g[l, 2] = u[p, l, 0], u[p, l, 1], u[p, l, 2]
                 rx, ry, rz = C[p, l, 0] - tcp[p, 0], C[p, l, 1] - tcp[p, 1], C[p, l, 2] - tcp[p, 2]
@@ -297,9 +308,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
                     S_e[l, 1, i, j] = pr[P_C_ACT] * e[i] * e[j] * scale[p, l, 1]
                     S_e[l, 4, i, j] = (RB[i, 0] * RB[j, 0] * pr[P_C_UC] + RB[i, 1] * RB[j, 1] * pr[P_C_UC]
                                        + RB[i, 2] * RB[j, 2] * (pr[P_C_UC] + pr[P_C_UB])) * scale[p, l, 4]
-            _cantilever(pr[P_L2], pr[P_E_PR], pr[P_G_PR], pr[P_A_PR], pr[P_IX_PR], pr[P_IY_PR], pr[P_JT_PR],
-                        pr[P_KAPPA_PR], shear, S_L)
-            _rotate(RB, S_L, S_e[l, 3], W6)
+            _rotate(RB, S_P, S_e[l, 3], W6)
             for i in range(6):
                 for j in range(6):
                     S_e[l, 3, i, j] *= scale[p, l, 3]
@@ -451,7 +460,7 @@ def chain_kernel(B, C, u, tcp, zP, slider, R_lg, e, params, scale, wrench, relea
                             fi -= X[l, i, j] * YHt[j]
                         F2 += fi * fi
                     F = np.sqrt(F2)
-                k_new = _hertz_k(F, pr[P_ESTAR], pr[P_RSTAR], pr[P_FMIN])
+                k_new = _hertz_k(hertz, F, pr[P_ESTAR], pr[P_RSTAR], pr[P_FMIN])
                 if it > 0:
                     d = abs(k_new - ksp[l]) / k_new
                     if d > change:

@@ -29,7 +29,8 @@ import logging
 import numpy as np
 
 from femcheck.chain.device_parameters import DeviceParameters, device_parameters
-from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
+# the laws through their modules: the function a module holds when the model runs is the one used
+from femcheck.compliance import cantilever_beam, hertz_point_contact
 from femcheck.compliance.sections import Section
 from femcheck.errors import ConvergenceError
 from femcheck.kinematics.frames import guideway_frames, link_frames, rot6, twist_shift
@@ -134,11 +135,13 @@ def _element_ingredients(case, legs: LegGeometry, p: DeviceParameters):
     n = legs.n
     R_lg = guideway_frames(case)
     R_B = link_frames(legs.u)
-    S_lg_B = rot6(R_lg) @ cantilever_compliance(legs.slider, p.E_lg, p.G_lg, p.lg_section, p.beam_shear) @ rot6(R_lg).swapaxes(-1, -2)
+    S_lg_B = rot6(R_lg) @ cantilever_beam.cantilever_compliance(legs.slider, p.E_lg, p.G_lg, p.lg_section, p.beam_shear) @ rot6(R_lg).swapaxes(-1, -2)
     uj_local = np.stack(np.broadcast_arrays(p.c_uc, p.c_uc, p.c_uc + p.c_ub), -1) * np.ones((n, 6, 1))
     S_uj_tt = np.einsum("nlij,nlj,nlkj->nlik", R_B, uj_local, R_B)
     c_act = np.broadcast_to(p.c_act, (n, 6))
-    prox_axial = p.L2 / (p.E_prox * p.prox_section.A) * np.ones((n, 6))
+    sec = p.prox_section   # the link's axial compliance L / (E A): S22 of the cantilever law
+    prox_axial = cantilever_beam.cantilever_terms(p.L2, p.E_prox, p.G_prox, sec.A, sec.Ix, sec.Iy, sec.Jt,
+                                                  sec.shear_factor, bool(p.beam_shear))[6] * np.ones((n, 6))
     return S_lg_B, S_uj_tt, c_act, prox_axial, R_B
 
 
@@ -151,7 +154,7 @@ def _element_compliances_at_C(legs: LegGeometry, p: DeviceParameters, scale, adj
     to_C = twist_shift(legs.C - legs.B)  # Jf(C - B)^T: twist at B -> twist at C
     S_e[:, :, _LG] = to_C @ S_lg_B @ to_C.swapaxes(-1, -2)
     S_e[:, :, _ACT, :3, :3] = c_act[..., None, None] * np.outer(legs.e, legs.e)
-    S_e[:, :, _PROX] = rot6(R_B) @ cantilever_compliance(p.L2, p.E_prox, p.G_prox, p.prox_section, p.beam_shear) @ rot6(R_B).swapaxes(-1, -2)
+    S_e[:, :, _PROX] = rot6(R_B) @ cantilever_beam.cantilever_compliance(p.L2, p.E_prox, p.G_prox, p.prox_section, p.beam_shear) @ rot6(R_B).swapaxes(-1, -2)
     S_e[:, :, _UJ, :3, :3] = S_uj_tt
     S_e = S_e * scale[..., None, None]
     if adjust.joint_rotation_compliance:
@@ -198,7 +201,7 @@ def chain_element_compliances(case, poses, k_sp=None, *, model: str = "detailed"
 
 
 def _hertz(F, p: DeviceParameters):
-    return hertz_tangent_stiffness(np.maximum(F, p.F_min_sp), p.E_star_sp, p.R_star_sp)
+    return hertz_point_contact.hertz_tangent_stiffness(np.maximum(F, p.F_min_sp), p.E_star_sp, p.R_star_sp)
 
 
 def _check_converged(history, it):
@@ -356,9 +359,15 @@ def pack_parameters(p: DeviceParameters, n: int) -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=32)
 def _case_constants(case):
-    """Per-case constants of the compiled path (cases are immutable, so this is safe to cache)."""
+    """Per-case constants of the compiled path, cached per case and law functions (cases are immutable; a law
+    replaced in its module gives new constants)."""
+    from femcheck.compliance.kernel_laws import law_functions
+    return _case_constants_for(case, law_functions())
+
+
+@functools.lru_cache(maxsize=32)
+def _case_constants_for(case, laws):
     p = device_parameters(case)
     return p, pack_parameters(p, 1), guideway_frames(case)
 
@@ -378,7 +387,8 @@ def _evaluate_compiled(case, model, joints, P, W, legs, params, adjust, scale) -
     energy = np.empty((n, 6, 5))
     iters = np.zeros(n, dtype=np.int64)
     sp_present = bool(scale[..., _SP].any())
-    status = kern.chain_kernel(legs.B, legs.C, legs.u, legs.tcp, np.ascontiguousarray(legs.R_platform[:, :, 2]),
+    from femcheck.compliance.kernel_laws import kernel_laws
+    status = kern.chain_kernel(*kernel_laws(), legs.B, legs.C, legs.u, legs.tcp, np.ascontiguousarray(legs.R_platform[:, :, 2]),
                                legs.slider, R_lg, legs.e, packed,
                                np.ascontiguousarray(scale), W, joints == "released", sp_present, bool(p.beam_shear),
                                float(adjust.joint_rotation_compliance), K, t, Wc, ksp, energy, iters)

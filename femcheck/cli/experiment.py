@@ -27,6 +27,8 @@ def register(app: typer.Typer) -> None:
         joints: str = typer.Option(None, "--joints", help="analytical models: rigid | released (default: the case's)"),
         mesh: str = typer.Option("coarse", "--mesh", help="--model fe: FE mesh coarse | default | fine"),
         parts: str = typer.Option("solid", "--parts", help="--model fe: guideways and links as solid or beam parts"),
+        joint_mesh: str = typer.Option("coarse", "--joint-mesh", help="--model fe: mesh of the joint contact FE "
+                                       "(the joint laws, as femcheck verify): coarse | default | fine"),
         no_sweep: bool = typer.Option(False, "--no-sweep", help="omit the preload-identification staircase at P0"),
         force: bool = typer.Option(False, "--force", help="overwrite existing output files"),
         poses: int = typer.Option(300, "--poses", min=10, help="serial robots: random poses (all markers at each)"),
@@ -66,16 +68,19 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"{joints!r}; expected rigid or released", param_hint="--joints")
         reading_model = None
         if model == "fe":
-            from femcheck.diagnose.fe_model import DeviceFEReadingModel
+            from femcheck.diagnose.fe_model import device_fe_reading_model
             from femcheck.fe_device.mesh_levels import MESH_LEVELS
             from femcheck.kinematics.psu6 import POINT_LABELS
-            from femcheck.verify.fe import run_fe
             if mesh not in MESH_LEVELS:
                 raise typer.BadParameter(f"{mesh!r}; expected one of {', '.join(MESH_LEVELS)}", param_hint="--mesh")
             if parts not in ("solid", "beam"):
                 raise typer.BadParameter(f"{parts!r}; expected solid or beam", param_hint="--parts")
-            typer.echo(f"device FE ({parts} parts, mesh {mesh}) at the 9 test points ...")
-            reading_model = DeviceFEReadingModel(case, run_fe(case, POINT_LABELS, ("detailed",), mesh, jobs=1, kind=parts))
+            if joint_mesh not in MESH_LEVELS:
+                raise typer.BadParameter(f"{joint_mesh!r}; expected one of {', '.join(MESH_LEVELS)}",
+                                         param_hint="--joint-mesh")
+            typer.echo(f"device FE ({parts} parts, mesh {mesh}, joint laws from the contact FE at the {joint_mesh} "
+                       "joint mesh, as femcheck verify) at the 9 test points ...")
+            reading_model = device_fe_reading_model(case, POINT_LABELS, mesh, parts, joint_mesh)
         try:
             ve = simulate(case, hidden, seed=seed, directions=dirs, level="detailed" if model == "fe" else model,
                           joints=joints, sweep=not no_sweep, model=reading_model)

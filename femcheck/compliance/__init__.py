@@ -2,6 +2,10 @@
 compliance (wrench -> twist at the element tip, local frame, SI) or its scalar ingredients.
 
 Local frames follow docs/conventions.md §5: every beam has local z as its axis.
+
+Each law has one implementation, in its module; callers (including the compiled chain kernels, through
+:mod:`femcheck.compliance.kernel_laws`) read the module attribute when they run, so a law replaced there is the
+law every path uses. The FE never calls these functions (:mod:`femcheck.fe_device.contact_scales`).
 """
 from femcheck.compliance.actuation import actuation_compliance, cable_stiffness, motor_stiffness_at_cable
 from femcheck.compliance.cantilever_beam import cantilever_compliance

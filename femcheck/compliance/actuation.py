@@ -9,6 +9,11 @@
 The paper puts 1/K_rotor on a rotational entry and sums stiffnesses (eq. 46); the motor torsion acts
 through the capstan in series with the cable, so compliances add ([DEV] in docs/conventions.md). The
 position loop is taken as ideal (no servo stiffness).
+
+:func:`cable_stiffness` and :func:`motor_stiffness_at_cable` are THE implementations of the cable and the motor
+shaft laws: :func:`femcheck.chain.device_parameters` and the parallel-device actuation read them from this module
+when they run (the compiled kernels receive c_act as a parameter). The device FE does not use them (it meshes the
+actuation, or restates eq. 44 in :mod:`femcheck.fe_device.contact_scales`).
 """
 from __future__ import annotations
 

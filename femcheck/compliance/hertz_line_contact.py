@@ -7,6 +7,10 @@
 
 Contact and bending carry the same force along the link axis, so they are in series (the paper
 has K_uz = K_UB alone; see docs/conventions.md [DEV]).
+
+:func:`line_contact_stiffness` and :func:`pin_bending_stiffness` are THE implementations of the U joint's laws:
+:func:`femcheck.chain.device_parameters` and :func:`femcheck.parallel.device.device_from_case` read them from this
+module when they run (the compiled kernels receive c_uc, c_ub as parameters).
 """
 from __future__ import annotations
 

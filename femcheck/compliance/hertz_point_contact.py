@@ -7,10 +7,17 @@ Mechanics, §4.2; docs/conventions.md §5 "Spherical joint").
 
 Seed 000 writes this with E' = 2 E* and R' = R*/2; its stiffness E' (2 R' delta)^(1/2) at the force of
 its eq. 27 equals (6 E*^2 R* F)^(1/3) exactly, so only the notation differs.
+
+:func:`hertz_tangent_stiffness` is THE implementation of the Hertz point-contact stiffness law: the numpy chain
+models call it, and the compiled chain kernels (:mod:`femcheck.chain.haptic_6psu_kernel`,
+:mod:`femcheck.parallel.chain_kernel`) call the function this module holds when they run, compiled by
+:func:`femcheck.compliance.kernel_laws.kernel_laws` (a numba-compatible leaf: scalars or numpy arrays, no
+allocation). :func:`effective_modulus` and :func:`effective_radius` are THE E* and R* of the analytical model.
 """
 from __future__ import annotations
 
 import numpy as np
+from numba.extending import register_jitable
 
 
 def effective_modulus(E1, nu1, E2, nu2):
@@ -28,9 +35,11 @@ def hertz_force(delta, E_star, R_star):
     return 4.0 / 3.0 * E_star * np.sqrt(R_star) * np.power(np.clip(delta, 0.0, None), 1.5)
 
 
+@register_jitable
 def hertz_tangent_stiffness(F, E_star, R_star):
-    """Tangent normal stiffness k = dF/d delta = (6 E*^2 R* F)^(1/3) (N/m) at force ``F`` (N)."""
-    return np.cbrt(6.0 * np.square(E_star) * R_star * np.asarray(F, dtype=float))
+    """Tangent normal stiffness k = dF/d delta = (6 E*^2 R* F)^(1/3) (N/m) at force ``F`` (N); scalars or arrays
+    (broadcast), also callable from numba-compiled code."""
+    return np.cbrt(6.0 * (E_star * E_star) * R_star * F)
 
 
 def spherical_joint_compliance(k_sp) -> np.ndarray:

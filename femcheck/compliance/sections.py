@@ -2,6 +2,9 @@
 
 Local frame: beam axis z; ``Iy = int x^2 dA`` resists bending deflection along x, ``Ix = int y^2 dA``
 along y. All inputs may be numpy arrays (broadcast), so that sweeps evaluate many sections at once.
+
+:func:`rectangle_section` and :func:`tube_section` are THE section laws of the analytical model (read from this
+module when the parameters are derived; the kernels receive A, Ix, Iy, Jt as parameters).
 """
 from __future__ import annotations
 

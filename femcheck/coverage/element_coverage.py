@@ -3,8 +3,11 @@
 For every element e of the detailed chain (guideway, actuation, spherical joint, proximal link,
 universal joint) the compliance of its *law* is multiplied by ``1 + PCT/100`` where the law is defined
 (``[model.law_scale]``, applied in :func:`femcheck.chain.device_parameters`). The analytical model sees
-the change. The FE sees it only where it reuses that law (a closed-form spring in the device FE); a meshed
-part does not. The verify check (mean analytical-FE error per direction against
+the change. The FE never reads the law; where it models the element by a closed form of its own, the same law
+restated from the materials (:func:`femcheck.fe_device.contact_scales.closed_form_elements`), a mistake in the
+law would be in that restatement too, so the mutation is applied to it as well
+(:meth:`~femcheck.fe_device.contact_scales.DeviceSprings.with_law_scale`); a meshed part, a contact-FE joint law
+or the actuation elements do not move. The verify check (mean analytical-FE error per direction against
 ``ERROR_THRESHOLDS["detailed"]``) is then applied to the mutated pair.
 
 Per element:
@@ -124,14 +127,16 @@ def progress_weights(n_points: int, mesh: str, laws_cached: dict | None) -> list
     return laws + [FE_MODELS_S_PER_POINT.get(mesh, 25.0) * n_points] + [MUTATION_S_PER_POINT * n_points] * len(ELEMENTS)
 
 
-def _deflections(case, points, directions, fe_models, fe_joints, analytical_joints, joint_laws=None):
-    """(analytical, FE) deflections along the load, each (n_points, n_directions) m."""
+def _deflections(case, points, directions, fe_models, fe_joints, analytical_joints, joint_laws=None, springs=None):
+    """(analytical, FE) deflections along the load, each (n_points, n_directions) m; ``springs``: the FE's
+    closed-form springs (default: the case's)."""
     from femcheck.fe_device.device_model import solve_point
     from femcheck.verify.analytical import run_analytical
 
     av = run_analytical(case, points, directions)
     a = np.array([[av.deflection(p, d, "detailed", analytical_joints) for d in directions] for p in points])
-    f = np.array([[solve_point(case, fe_models[p], ("detailed",), (fe_joints,), (d,), joint_laws=joint_laws)
+    f = np.array([[solve_point(case, fe_models[p], ("detailed",), (fe_joints,), (d,), joint_laws=joint_laws,
+                               springs=springs)
                    .cases[("detailed", fe_joints, d)]
                    .deflection_m for d in directions] for p in points])
     return a, f, av
@@ -148,6 +153,7 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
     """Measure the coverage (module docstring). ``fe_models``: {point: PointModel} to reuse (else built);
     ``joint_laws``: the contact-FE joint laws the FE uses (:class:`femcheck.fe_device.joint_laws.JointLaws`;
     None: the closed forms)."""
+    from femcheck.fe_device.contact_scales import closed_form_elements, device_springs
     from femcheck.fe_device.joint_laws import CLOSED_FORM
     from femcheck.verify.check import ERROR_THRESHOLDS
     from femcheck.verify.fe import run_fe
@@ -164,6 +170,7 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
     note("FE models")
     threshold = 100 * ERROR_THRESHOLDS["detailed"]
     sources = (joint_laws or CLOSED_FORM).sources()
+    restated = closed_form_elements(case, joint_laws)   # the FE's own closed forms of the same laws
     a0, f0, av = _deflections(case, points, directions, fe_models, fe_joints, analytical_joints, joint_laws)
     base = _worst_mean_error_pct(a0, f0)
     if base > threshold:
@@ -174,7 +181,9 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
     out = []
     for e in ELEMENTS:
         variant = case.with_params(**{f"model.law_scale.{e}": factor})
-        a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints, joint_laws)
+        springs = device_springs(case).with_law_scale(e, factor) if e in restated else None
+        a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints, joint_laws,
+                                 springs)
         da = float(np.mean(np.abs(a1 / a0 - 1)))
         df = float(np.mean(np.abs(f1 / f0 - 1)))
         ratio = df / da if da > 0 else float("nan")

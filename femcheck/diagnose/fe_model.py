@@ -26,7 +26,8 @@ from femcheck.chain import ELEMENTS
 @dataclasses.dataclass(frozen=True)
 class DeviceFEReadingModel:
     """Reading model backed by the device FE (see module doc). ``fe``: a ``FEVerification`` with the
-    detailed level; ``friction``: the joint friction data its contact joints used (None = the case's)."""
+    detailed level; ``friction``: the joint friction data its contact joints used (None = the FE run's, else the
+    case's). The joint laws are the FE run's (``fe.joint_laws``)."""
 
     case: object
     fe: object
@@ -60,7 +61,7 @@ class DeviceFEReadingModel:
 
     def tcp_displacement(self, pose, force, element_scale, joint_rotation_compliance=0.0) -> np.ndarray:
         """(m, 3) TCP translation (m) under TCP forces ``force`` (m, 3) N at test-point poses (m, 6)."""
-        from femcheck.chain import device_parameters
+        from femcheck.fe_device.contact_scales import device_springs
         from femcheck.fe_device.joint_friction import joint_friction
         from femcheck.fe_device.device_model import actuation_at
         from femcheck.fe_device.loads import solve_state
@@ -68,8 +69,8 @@ class DeviceFEReadingModel:
             raise ValueError(f"{self.name} evaluates the nominal FE model only (no effect parameters)")
         pose, force = np.asarray(pose, float), np.asarray(force, float)
         labels = self._point_of(pose)
-        params = device_parameters(self.case)
-        friction = self.friction or joint_friction(self.case)
+        params = device_springs(self.case)
+        friction = self.friction or getattr(self.fe, "friction", None) or joint_friction(self.case)
         out = np.zeros((len(pose), 3))
         # one nonlinear device solve per distinct (point, force); a zero force reads zero
         keys = {}
@@ -87,3 +88,15 @@ class DeviceFEReadingModel:
                             params, friction, k_act, getattr(self.fe, "joint_laws", None))
             out[rows] = s.twist[:3]
         return out
+
+
+def device_fe_reading_model(case, points, mesh: str = "coarse", kind: str = "solid", joint_mesh: str = "coarse",
+                            progress=None) -> DeviceFEReadingModel:
+    """The device FE of ``femcheck verify`` with its joint FE (:func:`femcheck.verify.fe.contact_joint_inputs`:
+    measured tilt slip ratio and contact-FE joint laws at ``joint_mesh``) at ``points``, detailed level, as a
+    reading model (``femcheck experiment simulate --model fe``)."""
+    from femcheck.verify.fe import contact_joint_inputs, run_fe
+    cj = contact_joint_inputs(case, joint_mesh, progress)
+    fe = run_fe(case, points, ("detailed",), mesh, jobs=1, kind=kind, progress=progress, friction=cj.friction,
+                joint_laws=cj.joint_laws)
+    return DeviceFEReadingModel(case, fe)

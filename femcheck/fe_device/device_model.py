@@ -71,7 +71,8 @@ def point_model(case, legs, k: int, point: str, guideways, link: SuperElement) -
 
 def actuation_springs_at(case, model: PointModel):
     """(6,) N/m actuation springs of the point's legs from the actuation FE (``[actuation.fe] model =
-    "elements"``, :mod:`femcheck.fe_device.actuation_fe`), or None: eq. 44 from the device parameters."""
+    "elements"``, :mod:`femcheck.fe_device.actuation_fe`), or None: eq. 44 from the FE's own springs
+    (:func:`femcheck.fe_device.contact_scales.device_springs`)."""
     return actuation_at(case, model)[0]
 
 
@@ -81,7 +82,7 @@ def actuation_at(case, model: PointModel):
     With ``[actuation.fe] model = "elements"``: the axial springs of the condensed actuation FE, and the guideway
     tip stiffnesses (frame A, local z = rail) plus the cable pretension's transverse geometric stiffness
     τ (1/l1 + 1/l2a) on the two translations across the rail (the strands run from pulleys on the base to the
-    slider). Otherwise (None, ``model.K_lg``): eq. 44 from the device parameters, no cable across the rail.
+    slider). Otherwise (None, ``model.K_lg``): eq. 44 from the FE's own springs, no cable across the rail.
     """
     if case.actuation.fe.model != "elements":
         return None, model.K_lg
@@ -130,18 +131,19 @@ class PointResult:
 
 
 def solve_point(case, model: PointModel, levels=LEVELS, joints=FE_JOINTS, directions=None,
-                friction=None, joint_laws=None) -> PointResult:
+                friction=None, joint_laws=None, springs=None) -> PointResult:
     """Every (level, joints, direction) load case of one point (:func:`femcheck.fe_device.loads.load_case`).
 
     ``contact`` joints exist at the detailed level only; ``friction`` (:class:`.joint_friction.JointFriction`)
     defaults to the case's, with the theoretical tilt slip ratio 1; ``joint_laws``
-    (:class:`.joint_laws.JointLaws`): the contact-FE-measured joint laws (None: the closed forms).
+    (:class:`.joint_laws.JointLaws`): the contact-FE-measured joint laws (None: the closed forms); ``springs``: the
+    FE's closed-form springs (default :func:`.contact_scales.device_springs` of the case).
     """
-    from femcheck.chain import device_parameters
+    from femcheck.fe_device.contact_scales import device_springs
     from femcheck.fe_device.joint_friction import joint_friction
     t0 = time.perf_counter()
-    params = device_parameters(case)
-    friction = friction or joint_friction(case)
+    params = springs or device_springs(case)   # the FE's own springs, never the analytical model's parameters
+    friction = friction or joint_friction(case, springs=params)
     directions = tuple(directions or case.loads.directions)
     k_act, K_lg = actuation_at(case, model)
     out: dict[tuple, LoadCaseResult] = {}

@@ -85,16 +85,9 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
     if progress:
         progress(f"{joint}: mesh and condensation")
     an = jf.analytical_compliance(case, joint, loads)
-    # penetration accepted: 1e-3 of the analytical approach at the preload (the compared quantity)
-    tol = 1e-3 * float(an[2, 2]) * min(loads)
+    tol, start = jf.contact_start(case, joint, loads)
     # spherical: the ball is pressed into the seat (−z); universal: the link pushes its yoke along +z
     sign = -1.0 if joint == "spherical" else 1.0
-    start = None
-    if joint == "spherical":  # start from the Hertz patch of the preload: g0 ≤ δ_H(F_5) / 2 ⇔ r ≤ a(F_5)
-        from femcheck.fe_device.joint_friction import joint_friction
-        from femcheck.fe_device.loads import hertz_approach
-        fr = joint_friction(case)
-        start = 0.5 * float(hertz_approach(min(loads), fr.E_star_Pa, fr.R_star_m))
     # spherical: the stick state sticks the contact area (closed points and points within 1e-3 of the
     # approach increment); universal: the closed points (as measured before)
     r = jf.solve_joint(model, loads, sign, penetration_tol=tol, initial_gap_m=start,

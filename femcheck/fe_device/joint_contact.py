@@ -62,8 +62,8 @@ class _BallSeatModel:
 
 def _ball_seat_model(case, size_m, *, friction: float, penalty_factor: float) -> _BallSeatModel:
     """Mesh, stiffness, seat clamp, ball-cap coupling to B and the contact pair (module doc)."""
-    from femcheck.compliance.hertz_point_contact import effective_modulus, effective_radius
     from femcheck.fe import constraints as cs
+    from femcheck.fe_device.contact_scales import device_springs
     from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
     from geometry import spherical_joint
@@ -85,9 +85,8 @@ def _ball_seat_model(case, size_m, *, friction: float, penalty_factor: float) ->
     slave, master = mesh.boundaries["sj_seat_contact"], mesh.boundaries["sj_ball_contact"]
     eps = default_penalty(mesh, slave, sj.seat_material.E_Pa, penalty_factor)
     pair = pair_surfaces(basis, slave, master, penalty_n=eps, friction=friction, name="sj", ndof=ndof)
-    Es = float(effective_modulus(sj.ball_material.E_Pa, sj.ball_material.nu, sj.seat_material.E_Pa, sj.seat_material.nu))
-    Rs = float(effective_radius(sj.ball_radius_m, sj.seat_curvature_1_per_m))
-    return _BallSeatModel(K, ndof, ref, base, pair, Es, Rs, int(basis.N), pts, trip)
+    springs = device_springs(case)   # the FE's own contact scale (tolerances), not the law it is compared with
+    return _BallSeatModel(K, ndof, ref, base, pair, springs.E_star_sp, springs.R_star_sp, int(basis.N), pts, trip)
 
 
 def spherical_joint_contact(case, size_m: float | None = None, loads=LOADS_N, penalty_factor: float = 100.0) -> JointContactResult:
@@ -104,10 +103,15 @@ def spherical_joint_contact(case, size_m: float | None = None, loads=LOADS_N, pe
     f = np.zeros(m.ndof)
     f[ref[2]] = -Fmax
     problem = ContactProblem(K=m.K, f=f, constraints=con, pairs=(m.pair,))
-    dh = hertz_approach(np.asarray(loads, float), m.E_star, m.R_star)
-    # penetration accepted: 0.1 % of the smallest Hertz approach (the compared quantity)
+    from femcheck.compliance.hertz_point_contact import effective_modulus, effective_radius
+    sj = case.spherical_joint
+    # the compared law: Hertz with the analytical model's E* and R*
+    dh = hertz_approach(np.asarray(loads, float), effective_modulus(sj.ball_material.E_Pa, sj.ball_material.nu,
+                                                                    sj.seat_material.E_Pa, sj.seat_material.nu),
+                        effective_radius(sj.ball_radius_m, sj.seat_curvature_1_per_m))
+    # penetration accepted: 0.1 % of the smallest approach the FE expects (its own estimate, not the law)
     res = solve_contact(problem, [F / Fmax for F in loads], initial_closure=max(float(m.pair.g0.min()), 0.0) + 1e-12,
-                        penetration_tol=1e-3 * float(dh.min()))
+                        penetration_tol=1e-3 * float(hertz_approach(min(loads), m.E_star, m.R_star)))
     delta = np.array([-s.u[ref[2]] for s in res.steps])
     return JointContactResult(tuple(float(F) for F in loads), delta, dh, int(con.nfree),
                               int(sum(res.iterations_per_step)), time.perf_counter() - t0)

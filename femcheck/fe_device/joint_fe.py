@@ -323,11 +323,9 @@ HERTZ_BAND = 0.85
 def _hertz_candidates(case, pair, F_max: float) -> np.ndarray:
     """Ball-in-seat points within the Hertz band (``HERTZ_BAND``) of the largest load, plus the facet-chord
     error of the contact mesh (the gaps carry it). Verified after the solve: every dropped point stays open."""
-    from femcheck.fe_device.joint_friction import joint_friction
-    from femcheck.fe_device.loads import hertz_approach
+    from femcheck.fe_device.contact_scales import device_springs
 
-    fr = joint_friction(case)
-    d = float(hertz_approach(F_max, fr.E_star_Pa, fr.R_star_m))
+    d = float(device_springs(case).ball_approach(F_max))
     chord = max(-float(pair.g0.min()), 0.0)
     return pair.g0 <= HERTZ_BAND * d + 2.0 * chord
 
@@ -569,6 +567,20 @@ def _tangent(model: CondensedJoint, closed_sets) -> np.ndarray:
     return Cb, Kb
 
 
+def contact_start(case, joint: str, loads_N) -> tuple[float, float | None]:
+    """(penetration tolerance (m), initial gap (m) below which points start closed, or None) of the contact
+    FE of ``joint`` loaded over ``loads_N`` (N), from the FE's own expected compliance
+    (:mod:`femcheck.fe_device.contact_scales`, never the law under test): penetration accepted 1e-3 of the
+    expected approach at the smallest load; the ball starts from the expected Hertz patch of that load,
+    g0 ≤ δ(F_min) / 2 ⇔ r ≤ a(F_min)."""
+    from femcheck.fe_device.contact_scales import device_springs
+    sp_ = device_springs(case)
+    F0 = float(min(loads_N))
+    tol = 1e-3 * sp_.axial_compliance(joint, loads_N) * F0
+    start = 0.5 * float(sp_.ball_approach(F0)) if joint == "spherical" else None
+    return tol, start
+
+
 def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
     """6 x 6 compliance of the closed-form joint laws (seed 000 §4.4.1) in the joint frame, SI.
 
@@ -582,11 +594,16 @@ def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
     from femcheck.fe_device.joint_friction import joint_friction
     from femcheck.fe_device.loads import hertz_approach
 
-    fr = joint_friction(case)
+    # the law under test: E*, R*, K_UC and K_UB as the analytical model has them (device_parameters), also
+    # for the Mindlin stick terms that follow from the Hertz radius and the line contact
+    p = device_parameters(case)
+    E_star, R_star = float(np.squeeze(p.E_star_sp)), float(np.squeeze(p.R_star_sp))
+    c_uc, c_ub = float(np.squeeze(p.c_uc)), float(np.squeeze(p.c_ub))
+    fr = dataclasses.replace(joint_friction(case), E_star_Pa=E_star, R_star_m=R_star, K_uc_N_per_m=1.0 / c_uc)
     F0, F1 = float(min(loads_N)), float(max(loads_N))
     C = np.zeros((6, 6))
     if joint == "spherical":
-        d = hertz_approach(np.array([F0, F1]), fr.E_star_Pa, fr.R_star_m)
+        d = hertz_approach(np.array([F0, F1]), E_star, R_star)
         a = float(fr.contact_radius(F1))
         kt, ks, _ = fr.stick_stiffness(np.array([F1]))
         C[2, 2] = (d[1] - d[0]) / (F1 - F0)
@@ -594,8 +611,6 @@ def analytical_compliance(case, joint: str, loads_N=(5.0, 20.0)) -> np.ndarray:
         C[3, 3] = C[4, 4] = 1.0 / float(kt[0])
         C[5, 5] = 1.0 / float(ks[0])
     else:
-        p = device_parameters(case)
-        c_uc, c_ub = float(np.squeeze(p.c_uc)), float(np.squeeze(p.c_ub))
         _, _, kp = fr.stick_stiffness(np.array([F1]))
         C[0, 0] = C[1, 1] = c_uc
         C[2, 2] = c_uc + c_ub

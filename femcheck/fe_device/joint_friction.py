@@ -101,15 +101,17 @@ def _secant(k_stick, M_slip, r):
         return np.where(r * k_stick > M_slip, M_slip / np.where(r > 0, r, 1.0), k_stick)
 
 
-def joint_friction(case, tilt_slip_ratio: float = 1.0) -> JointFriction:
-    """The :class:`JointFriction` of ``case`` (materials, radii, μ from ``[solid.*_joint] friction``)."""
-    from femcheck.chain import device_parameters
+def joint_friction(case, tilt_slip_ratio: float = 1.0, springs=None) -> JointFriction:
+    """The :class:`JointFriction` of ``case`` (materials, radii, μ from ``[solid.*_joint] friction``). E*, R* and
+    K_UC are the device FE's own (``springs``, default :func:`femcheck.fe_device.contact_scales.device_springs`,
+    from the materials), never the analytical model's: the slip moments must not move with a law under test."""
+    from femcheck.fe_device.contact_scales import device_springs
     sj, uj, so = case.spherical_joint, case.universal_joint, case.solid
-    p = device_parameters(case)
+    sp = springs or device_springs(case)
     m1, m2 = sj.ball_material, sj.seat_material
     G_star = 1.0 / ((2.0 - m1.nu) / m1.G_Pa + (2.0 - m2.nu) / m2.G_Pa)
     return JointFriction(mu_sp=so.spherical_joint.friction, mu_uj=so.universal_joint.friction,
                          ball_radius_m=sj.ball_radius_m, pin_radius_m=uj.pin_radius_m,
-                         E_star_Pa=float(np.squeeze(p.E_star_sp)), R_star_m=float(np.squeeze(p.R_star_sp)),
-                         G_star_Pa=G_star, K_uc_N_per_m=1.0 / float(np.squeeze(p.c_uc)),
+                         E_star_Pa=sp.E_star_sp, R_star_m=sp.R_star_sp,
+                         G_star_Pa=G_star, K_uc_N_per_m=1.0 / sp.c_uc,
                          nu_pin=uj.pin_material.nu, tilt_slip_ratio=tilt_slip_ratio)

@@ -28,7 +28,8 @@ load path and does not measure them.
 
 Measurements are cached on disk (``<mesh cache>/joint_laws/<key>.npz``, key = geometry, materials, friction,
 clearance, mesh level and its element sizes, ladder and the source of the joint FE code), so ``make verify`` and ``coverage`` do not
-repeat them; a law mutation (``[model.law_scale]``) does not enter the key: it changes no joint FE input.
+repeat them; a law mutation (``[model.law_scale]``, or an analytical law changed in :mod:`femcheck.compliance`) does
+not enter the key: it changes no joint FE input (:mod:`femcheck.fe_device.contact_scales`).
 """
 from __future__ import annotations
 
@@ -160,6 +161,7 @@ def _code_version() -> str:
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256(geometry_version().encode())
     files = [Path(__file__), root / "fe_device" / "joint_fe.py", root / "fe_device" / "mesh_levels.py",
+             root / "fe_device" / "contact_scales.py",
              root / "fe" / "elasticity.py",
              root / "fe" / "constraints.py", *sorted((root / "fe" / "contact").glob("*.py"))]
     for f in files:
@@ -221,16 +223,9 @@ def measure_joint_law(case, joint: str, mesh: str = "coarse", ladder=None, use_c
             return hit
     t0 = time.perf_counter()
     model = jf.build_joint(case, joint, mesh, max_load_N=float(ladder[-1]))
-    an = jf.analytical_compliance(case, joint, (float(ladder[0]), float(ladder[-1])))
-    # penetration accepted: 1e-3 of the analytical approach increment at the first level (as check-joints)
-    tol = 1e-3 * float(an[2, 2]) * float(ladder[0])
+    # as check-joints: tolerance and starting patch from the FE's own estimate, stick the contact area
+    tol, start = jf.contact_start(case, joint, (float(ladder[0]), float(ladder[-1])))
     sign = -1.0 if joint == "spherical" else 1.0
-    start = None
-    if joint == "spherical":  # as check-joints: start from the Hertz patch of the first level, stick the contact area
-        from femcheck.fe_device.joint_friction import joint_friction
-        from femcheck.fe_device.loads import hertz_approach
-        fr = joint_friction(case)
-        start = 0.5 * float(hertz_approach(float(ladder[0]), fr.E_star_Pa, fr.R_star_m))
     r = jf.solve_joint(model, tuple(ladder), sign, penetration_tol=tol, initial_gap_m=start,
                        area_gap_rel=1e-3 if joint == "spherical" else 0.0, level_tangents=True)
     law = MeasuredJointLaw(joint, mesh, ladder, np.asarray(r.axial_m, float), np.asarray(r.level_tangent_stiffness),

@@ -71,7 +71,9 @@ def solve_state(K_lg, K_link, R_A, R_B, G, wrench, level: str, joints: str, para
                 k_act=None, joint_laws=None) -> LoadState:
     """Equilibrium under ``wrench`` (6,) for 6 legs (K_lg (6, 6, 6), R_A, R_B (6, 3, 3), G (6, 6, 6)).
 
-    ``params``: :class:`femcheck.chain.DeviceParameters` (scalar entries) for the spring stiffnesses;
+    ``params``: :class:`femcheck.fe_device.contact_scales.DeviceSprings`, the FE's own closed-form springs (ball
+    Hertz spring, U joint line contact and pin bending, eq. 44 actuation) where the FE has no element or measured
+    law of its own (never the analytical model's :class:`femcheck.chain.DeviceParameters`);
     ``friction``: :class:`femcheck.fe_device.joint_friction.JointFriction` (``contact`` joints only);
     ``k_act`` (6,) N/m: the actuation springs along the rails (default 1/c_act of eq. 44 from ``params``;
     :mod:`femcheck.fe_device.actuation_fe` gives them from elements);

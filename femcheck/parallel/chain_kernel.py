@@ -36,6 +36,11 @@ P-S-U and U-P-S legs use their one wrench directly, the force along the line of 
 what the chain model reads (no passive joint angles, unless a joint limit needs them, and no passive twists; the
 R*-U-U leg gives all of them, its released wrench basis needs the passive twists). Every helper the per-pose loops
 call is a leaf, for speed: see :func:`_rot`.
+
+The element laws are not repeated here: the Hertz point-contact tangent stiffness and the cantilever tip compliance
+are the functions of :mod:`femcheck.compliance` (``hertz_tangent_stiffness``, ``cantilever_terms``), passed in as
+compiled first-class functions (:func:`femcheck.compliance.kernel_laws.kernel_laws`); the other laws arrive in the
+device tables (:mod:`femcheck.parallel.kernel_tables`, from :func:`femcheck.parallel.device.device_from_case`).
 """
 from __future__ import annotations
 
@@ -799,28 +804,14 @@ def _null_basis(tw, passive, nd, Nb, Aw, Vr, vn):
     return m
 
 
-@njit(cache=True, error_model="numpy")
-def _hertz_k(F, Es, Rs):
-    """Hertz point contact stiffness (6 E*^2 R* F)^(1/3) (cube root: a third of pow's time, same to rounding)."""
-    return np.cbrt(6.0 * Es * Es * Rs * F)
-
-
 @njit(cache=True, error_model="numpy", inline="always")
-def _link_form(L, lk_p, l, k, shear, lR, jp, r, Nb, m, Ae, ns, V):
+def _link_form(cantilever, L, lk_p, l, k, shear, lR, jp, r, Nb, m, Ae, ns, V):
     """Ae[l, ns] (m, m) = N^T S_C N of link k of leg l: N = Nb[l]'s wrenches carried to the link tip E
-    (r = C - E) and into the link frame R = lR[l, jp, k], then the sparse local tip compliance
-    (femcheck.compliance.cantilever_beam) of length L and section lk_p[l, k]. Indexed in place (no views)."""
-    E, G, A, Ix, Iy, Jt, kappa = (lk_p[l, k, 0], lk_p[l, k, 1], lk_p[l, k, 2], lk_p[l, k, 3], lk_p[l, k, 4],
-                                  lk_p[l, k, 5], lk_p[l, k, 6])
-    lat = L / (kappa * G * A) if shear else 0.0
-    s00 = L ** 3 / (3.0 * E * Iy) + lat
-    s04 = L ** 2 / (2.0 * E * Iy)
-    s44 = L / (E * Iy)
-    s11 = L ** 3 / (3.0 * E * Ix) + lat
-    s13 = -(L ** 2) / (2.0 * E * Ix)
-    s33 = L / (E * Ix)
-    s22 = L / (E * A)
-    s55 = L / (G * Jt)
+    (r = C - E) and into the link frame R = lR[l, jp, k], then the sparse local tip compliance whose entries the
+    ``cantilever`` law gives (femcheck.compliance.cantilever_beam.cantilever_terms, passed in by
+    femcheck.compliance.kernel_laws) of length L and section lk_p[l, k]. Indexed in place (no views)."""
+    s00, s04, s44, s11, s13, s33, s22, s55 = cantilever(L, lk_p[l, k, 0], lk_p[l, k, 1], lk_p[l, k, 2], lk_p[l, k, 3],
+                                                        lk_p[l, k, 4], lk_p[l, k, 5], lk_p[l, k, 6], shear)
     for a in range(m):
         f0, f1, f2 = Nb[l, 0, a], Nb[l, 1, a], Nb[l, 2, a]
         m0 = Nb[l, 3, a] + r[1] * f2 - r[2] * f1
@@ -908,9 +899,10 @@ def _sym_add(K, E, M, l, m, sign, xv):
 
 
 @njit(cache=True, error_model="numpy")
-def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
+def chain_kernel(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
-    """Evaluate n poses. State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
+    """Evaluate n poses with the Hertz and cantilever laws ``hertz``, ``cantilever``
+    (:func:`femcheck.compliance.kernel_laws.kernel_laws`). State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
     scale (n, L, E). Outputs K, S (n, 6, 6), t (n, 6), leg stiffness (n, L, 6, 6), leg wrench (n, L, 6),
     element energy (n, L, E), Hertz point stiffness (n, L, nhp + nml: then the axial tangent stiffness of the
     measured laws with a force ladder, mode 3 legs), iterations (n,). Returns 0; 1 + p if the
@@ -919,12 +911,13 @@ def chain_kernel(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
     ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
     Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
-    return _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, 0, tcp.shape[0],
+    return _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
+                        0, tcp.shape[0],
                         K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
 
 
 @njit(cache=True, error_model="numpy")
-def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """:func:`chain_kernel` on the poses p0 <= p < p1: the state arrays (C, cen, tw, lR, llen) at index p - p0,
     everything else at p."""
@@ -1019,7 +1012,7 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                 en = lk_i[l, k, 1]
                 for i in range(3):
                     r3[i] = C[l, jp, i] - cen[l, jp, en, i]
-                _link_form(llen[l, jp, k], lk_p, l, k, shear, lR, jp, r3, Nb, m, Ae, ns, V)
+                _link_form(cantilever, llen[l, jp, k], lk_p, l, k, shear, lR, jp, r3, Nb, m, Ae, ns, V)
                 f = scale[p, l, kind]
                 for a in range(m):
                     for b in range(m):
@@ -1090,7 +1083,7 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
             nhp = i_n[l, 4] if detailed else 0
             c_hp[l] = 0.0
             for j in range(nhp):
-                kh[l, j] = _hertz_k(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
+                kh[l, j] = hertz(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
                 c_hp[l] += scale[p, l, k_hp] / kh[l, j]
             if nhp > 0:
                 any_hp = True
@@ -1235,7 +1228,7 @@ def _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wren
                     F = np.sqrt(F2)
                 c_hp[l] = 0.0
                 for j in range(i_n[l, 4]):
-                    k_new = _hertz_k(max(F, hp[l, j, 2]), hp[l, j, 0], hp[l, j, 1])
+                    k_new = hertz(max(F, hp[l, j, 2]), hp[l, j, 0], hp[l, j, 1])
                     d = abs(k_new - kh[l, j]) / k_new
                     if d > change:
                         change = d
@@ -1359,7 +1352,7 @@ def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_kernel(tab, detailed, released, shear, P, wrench, scale,
+def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, P, wrench, scale,
                     K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, contrib_out, bad_out):
     """Inverse kinematics and chain model of the n TCP poses P (n, 6) in one call, block by block of ``BLOCK``
     poses: the targets (:func:`_pose_targets`), the legs (:func:`_ik_range`: a closed-form leg computes only
@@ -1396,7 +1389,8 @@ def evaluate_kernel(tab, detailed, released, shear, P, wrench, scale,
                 if not ok[l, p - p0]:
                     bad_out[0], bad_out[1] = p, l
                     return 0
-        status = _chain_range(tab, detailed, released, shear, C, cen, tw, lR, llen, P, wrench, scale, p0, p1,
+        status = _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, P, wrench, scale,
+                              p0, p1,
                               K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
         if status != 0:
             return status

@@ -29,7 +29,8 @@ import functools
 
 import numpy as np
 
-from femcheck.compliance import cantilever_compliance, hertz_tangent_stiffness
+# the laws through their modules: the function a module holds when the model runs is the one used
+from femcheck.compliance import cantilever_beam, hertz_point_contact
 from femcheck.errors import ConvergenceError, UnreachablePoseError
 from femcheck.kinematics.frames import rot6, twist_shift
 from femcheck.parallel.leg_kinematics import DeviceState, as_poses, released_wrenches, solve_legs
@@ -127,7 +128,7 @@ def leg_element_compliances(device, state: DeviceState, model: str = "detailed")
         for m, ln in enumerate(leg.links):
             if ln.section is None:
                 continue
-            S_loc = cantilever_compliance(s.link_length[:, m], ln.E, ln.G, ln.section, device.beam_shear)
+            S_loc = cantilever_beam.cantilever_compliance(s.link_length[:, m], ln.E, ln.G, ln.section, device.beam_shear)
             Q = rot6(s.link_R[:, m])
             to_C = twist_shift(s.C - s.centres[:, ln.end])
             S_C = to_C @ Q @ S_loc @ np.swapaxes(Q, -1, -2) @ np.swapaxes(to_C, -1, -2)
@@ -213,7 +214,7 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
          for i, leg in enumerate(device.legs)]
     S_fixed = [sum(p.values()) if p else np.zeros((n, 6, 6)) for p in parts]
     hertz = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.hertz_point.items()} if model == "detailed" else {}
-    k_h = {key: hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
+    k_h = {key: hertz_point_contact.hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
     ladder = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.measured_ladder.items()} if model == "detailed" else {}
     c_lad = {key: ladder_compliance(np.zeros(n), *v) for key, v in ladder.items()}   # start at the ladder's floor
 
@@ -240,7 +241,7 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
             change_lad = max(change_lad, float(np.max(np.abs(c_new - c_lad[i, j]) / c_new)))
             c_lad[i, j] = c_new
         for (i, j), (E, R, F_min) in hertz.items():
-            k_new = hertz_tangent_stiffness(np.maximum(np.linalg.norm(W_C[:, i, :3], axis=1), F_min), E, R)
+            k_new = hertz_point_contact.hertz_tangent_stiffness(np.maximum(np.linalg.norm(W_C[:, i, :3], axis=1), F_min), E, R)
             change = max(change, float(np.max(np.abs(k_new - k_h[i, j]) / k_new)))
             k_h[i, j] = k_new
         history.append(max(change, change_lad))

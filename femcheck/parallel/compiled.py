@@ -90,7 +90,8 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
         return None
     C, cen, tw, lR, llen = _packed(device, state)
     out = _outputs(tb, state.n, device.n_legs)
-    status = kern.chain_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
+    from femcheck.compliance.kernel_laws import kernel_laws
+    status = kern.chain_kernel(*kernel_laws(), tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
                                lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
                                np.ascontiguousarray(scale), *out)
     return _finish(tb, device, model, status, out)
@@ -112,7 +113,8 @@ def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, mode
     out = _outputs(tb, n, device.n_legs)
     contributions = np.empty((n, tb.n_elem))
     bad = np.empty(2, dtype=np.int64)
-    status = kern.evaluate_kernel(tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
+    from femcheck.compliance.kernel_laws import kernel_laws
+    status = kern.evaluate_kernel(*kernel_laws(), tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
                                   np.ascontiguousarray(P), np.ascontiguousarray(W), np.ascontiguousarray(scale),
                                   *out, contributions, bad)
     if bad[0] >= 0:

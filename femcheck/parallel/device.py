@@ -13,8 +13,9 @@ import dataclasses
 
 import numpy as np
 
-from femcheck.compliance import effective_modulus, effective_radius, line_contact_stiffness, pin_bending_stiffness
-from femcheck.compliance.sections import Section, rectangle_section, tube_section
+# laws called through their modules, so that the function a module holds is the one used (one implementation)
+from femcheck.compliance import hertz_line_contact, hertz_point_contact, sections
+from femcheck.compliance.sections import Section
 from femcheck.errors import FemcheckError
 from femcheck.kinematics.frames import rotvec_to_matrix, matrix_to_rotvec
 
@@ -214,8 +215,8 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
             section, E, G = None, 0.0, 0.0
         else:
             E, G = ls.material.E_Pa, ls.material.G_Pa
-            section = (tube_section(ls.outer_diameter_m, ls.inner_diameter_m) if ls.element == "tube"
-                       else rectangle_section(ls.width_m, ls.depth_m))
+            section = (sections.tube_section(ls.outer_diameter_m, ls.inner_diameter_m) if ls.element == "tube"
+                       else sections.rectangle_section(ls.width_m, ls.depth_m))
         d = link_dirs[m]
         x = _normal_to(d) if ls.x_axis is None else Q @ np.asarray(ls.x_axis, float)
         x = x - (x @ d) * d
@@ -228,13 +229,16 @@ def _resolve_leg(spec, i: int, copy: int, Q: np.ndarray, R_home, p_home, copies:
     for k, j in enumerate(spec.joints):
         if j.hertz_point is not None:
             h = j.hertz_point
-            E_star = effective_modulus(h.ball_material.E_Pa, h.ball_material.nu, h.seat_material.E_Pa, h.seat_material.nu)
-            hp[k] = (float(E_star), float(effective_radius(h.ball_radius_m, h.seat_curvature_1_per_m)), h.min_contact_force_N)
+            E_star = hertz_point_contact.effective_modulus(h.ball_material.E_Pa, h.ball_material.nu,
+                                                           h.seat_material.E_Pa, h.seat_material.nu)
+            hp[k] = (float(E_star), float(hertz_point_contact.effective_radius(h.ball_radius_m, h.seat_curvature_1_per_m)),
+                     h.min_contact_force_N)
         if j.hertz_line is not None:
             h = j.hertz_line
-            E_star = effective_modulus(h.pin_material.E_Pa, h.pin_material.nu, h.bore_material.E_Pa, h.bore_material.nu)
-            k_uc = line_contact_stiffness(h.contact_length_m, E_star)
-            k_ub = pin_bending_stiffness(h.pin_material.E_Pa, h.pin_radius_m, h.pin_span_m)
+            E_star = hertz_point_contact.effective_modulus(h.pin_material.E_Pa, h.pin_material.nu,
+                                                           h.bore_material.E_Pa, h.bore_material.nu)
+            k_uc = hertz_line_contact.line_contact_stiffness(h.contact_length_m, E_star)
+            k_ub = hertz_line_contact.pin_bending_stiffness(h.pin_material.E_Pa, h.pin_radius_m, h.pin_span_m)
             hl[k] = (float(1.0 / k_uc), float(1.0 / k_ub), link_of(k))
     ml, mlad = {}, {}
     for k, j in enumerate(spec.joints):

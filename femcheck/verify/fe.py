@@ -62,6 +62,35 @@ class FEVerification:
                         for d in self.directions], axis=0)
 
 
+@dataclasses.dataclass(frozen=True)
+class ContactJointInputs:
+    """What the device FE takes from the joints' own contact FE: ``tilt`` the ball-tilt study
+    (:func:`femcheck.verify.contact_joints.ball_tilt_study`), ``friction`` the joint friction data with its measured
+    tilt slip ratio, ``joint_laws`` the contact-FE-measured joint laws
+    (:func:`femcheck.fe_device.joint_laws.measure_joint_laws`), and their wall times ``tilt_s``, ``laws_s``."""
+
+    tilt: dict
+    friction: object
+    joint_laws: object
+    tilt_s: float
+    laws_s: float
+
+
+def contact_joint_inputs(case, joint_mesh: str = "coarse", progress=None) -> ContactJointInputs:
+    """The contact-FE joint inputs of the detailed device FE at ``joint_mesh``: the one definition that
+    ``femcheck verify`` (with the joint FE) and ``femcheck experiment simulate --model fe`` share, so both run the
+    same device FE."""
+    from femcheck.fe_device.joint_friction import joint_friction
+    from femcheck.fe_device.joint_laws import measure_joint_laws
+    from femcheck.verify.contact_joints import ball_tilt_study, tilt_slip_ratio
+    t0 = time.perf_counter()
+    tilt = ball_tilt_study(case, progress)
+    friction = joint_friction(case, tilt_slip_ratio=tilt_slip_ratio(tilt))
+    t1 = time.perf_counter()
+    joint_laws = measure_joint_laws(case, joint_mesh, progress=progress)
+    return ContactJointInputs(tilt, friction, joint_laws, t1 - t0, time.perf_counter() - t1)
+
+
 def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default", jobs: int = 1,
            kind: str = "solid", progress=None, friction=None, joint_laws=None) -> FEVerification:
     """Build and solve the device FE model at ``points`` for ``levels`` (module docstring).

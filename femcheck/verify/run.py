@@ -224,19 +224,11 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     put.files = files
     fe = None
     tilt, friction, t_tilt = None, None, 0.0
-    if levels and joint_fe and "detailed" in levels:
-        from femcheck.fe_device.joint_friction import joint_friction
-        from femcheck.verify.contact_joints import ball_tilt_study, tilt_slip_ratio
-        tc = time.perf_counter()
-        tilt = ball_tilt_study(case, progress)
-        friction = joint_friction(case, tilt_slip_ratio=tilt_slip_ratio(tilt))
-        t_tilt = time.perf_counter() - tc
     joint_laws, t_laws = None, 0.0
     if levels and joint_fe and "detailed" in levels:
-        from femcheck.fe_device.joint_laws import measure_joint_laws
-        tc = time.perf_counter()
-        joint_laws = measure_joint_laws(case, joint_mesh, progress=progress)
-        t_laws = time.perf_counter() - tc
+        from femcheck.verify.fe import contact_joint_inputs
+        cj = contact_joint_inputs(case, joint_mesh, progress)
+        tilt, friction, joint_laws, t_tilt, t_laws = cj.tilt, cj.friction, cj.joint_laws, cj.tilt_s, cj.laws_s
     joint_results, t_joints = [], 0.0
     if levels and joint_fe and "detailed" in levels:
         # the joint table: contact FE of each passive joint at the coarse joint mesh
