@@ -70,7 +70,7 @@ def test_cli_table_and_json():
     runner = CliRunner()
     res = runner.invoke(_app(), ["check-solver", "cantilever-beam", "bar-modal", "--mesh", "coarse", "--json", "-"])
     assert res.exit_code == 0, res.output
-    data = json.loads(res.output)
+    data = json.loads(res.stdout)   # the JSON is stdout; progress lines go to stderr
     assert [d["name"] for d in data] == ["cantilever-beam", "bar-modal"]
     for d in data:
         assert {"name", "computed", "reference", "rel_error", "dofs", "iterations", "seconds"} <= set(d)
