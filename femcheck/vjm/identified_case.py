@@ -47,8 +47,8 @@ def identified_case_text(case, case_text: str, compliance: np.ndarray, standard_
 
 
 def weights_case_text(case, case_text: str, results: dict, data_path: str) -> str:
-    """``case_text`` with seed 001's identified weights as ``[fitting] weights`` (the links' stiffness becomes
-    W K W, eq. 10): the fit of both setups together when the data hold both, else the one setup's. Weights the case
+    """``case_text`` with seed 001's identified weights as ``[fitting] weights`` (the links' stiffness scaled by
+    them under the case's reading of eq. 10, ``[fitting] stiffness_scaling``): the fit of both setups together when the data hold both, else the one setup's. Weights the case
     already held are multiplied by the fitted ones (the fit was relative to them); the comment gives each weight's
     95 % interval and names the unidentifiable ones (their value is the fit's, not a measurement)."""
     name = "D/F + F/D" if "D/F + F/D" in results else next(iter(results))
