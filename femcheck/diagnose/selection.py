@@ -206,9 +206,11 @@ class Diagnosis:
                 "folds": [list(f) for f in self.folds], "warnings": list(self.warnings),
                 "steps": list(self.steps),
                 "placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
-                                "screen_ebic_none": p.score_none, "t_per_leg": list(p.t)} for p in self.placements],
+                                "screen_ebic_none": p.score_none, "t_per_leg": list(p.t), "one_factor": p.effect.uniform}
+                               for p in self.placements],
                 "partner_placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
-                                        "screen_ebic_none": p.score_none} for p in self.partner_placements]}
+                                        "screen_ebic_none": p.score_none, "one_factor": p.effect.uniform}
+                                       for p in self.partner_placements]}
 
 
 def sigma_source(readings, rival_note: str = "") -> str:
@@ -524,6 +526,56 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     return new, out
 
 
+#: the best pairs holding a located cause whose placements are refitted together (:func:`refit_pair_placements`)
+REFIT_PAIRS = 3
+
+
+def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_PAIRS, rounds: int = 2) -> tuple[list, list]:
+    """Pairs whose located placement is chosen again with the partner in place: not a greedy first pick.
+
+    A placement is screened on the residual of the model as given (or of one lead), where a second cause's signature
+    is still in it: the legs it takes then partly fit that other cause (a guideway placed on five legs with odd factors
+    where the guideways of all legs and the cables are softer), and the pair fitted from it stays there. For each of the
+    ``top`` best pairs of ``rivals`` (by BIC) that hold a located cause, the placement of each located partner is
+    screened again (:func:`femcheck.diagnose.placement.screen_placements`, every element type) on the background of the
+    other partner at its values *in the pair*, and the pair is refitted jointly from the screened leg scales; with two
+    located partners they alternate, ``rounds`` times or until the placements stop changing. Every new pair joins the
+    rivals and is weighed like the others (its extended-BIC penalty included). Returns (placements, explanations)."""
+    n_data = 3 * readings.n_states
+    have = {frozenset(ex.payload.effects) for ex in rivals if ex.payload is not None}
+    pairs = sorted((ex for ex in rivals if ex.payload is not None and len(ex.payload.effects) == 2
+                    and any(e.located for e in ex.payload.effects)), key=lambda ex: ex.payload.bic)[:top]
+    placements, out = [], []
+    for ex in pairs:
+        fit = ex.payload
+        for _ in range(rounds):
+            changed = False
+            for i, eff in enumerate(fit.effects):
+                if not eff.located:
+                    continue
+                other = fit.effects[1 - i]
+                screened = screen_placements(model, readings, located, keep=1,
+                                             background=([other], [fit.values[1 - i]]))
+                if not screened or screened[0].effect == eff or screened[0].effect.id == other.id:
+                    continue
+                p = screened[0]
+                key = frozenset([other, p.effect])
+                if key in have:
+                    continue
+                start = np.concatenate([fit.values[1 - i], np.asarray(p.values, float)])
+                new = fit_effects(model, readings, [other, p.effect], starts=[start], max_nfev=100)
+                have.add(key)
+                placements.append(p)
+                out.append(_explanation(new))
+                if new.bic < fit.bic:
+                    fit, changed = new, True
+                    break
+            if not changed:
+                break
+    log.info("pair placements refitted together: %d new pairs", len(out))
+    return placements, out
+
+
 #: seconds per unit of each phase of :func:`diagnose` (the reference case, 9 points x 6 directions, the whole
 #: effect library; measured phase by phase on the shared 2-core machine with the compiled kernels cached, 67 s
 #: in all): screening one located effect's placements, one fit of the model as given per fold, one candidate
@@ -716,6 +768,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                                            n_leads=partner_leads if max_effects >= 2 and rivals_pairs else 0,
                                            bic_margin=bic_margin, siblings=located_siblings)
         rivals += extra
+        if max_effects >= 2 and rivals_pairs:
+            refit, extra = refit_pair_placements(model, readings, located, rivals)
+            partners += refit
+            rivals += extra
     if located and max_located > 0 and unweighed_mass:
         leads = _partner_leads(rivals, partner_leads, bic_margin) if max_effects >= 2 and rivals_pairs else []
         rivals += unweighed_explanations(model, readings, located, rivals, leads)
