@@ -97,3 +97,39 @@ def test_thinner_guideways_and_softer_cables_are_named_as_the_pair_of_elements(c
     assert guide.params["all_legs"] == pytest.approx(s ** -4, rel=0.10)
     assert all(c.probability > 0.9 for c in d.causes)
     assert d.verdict == "explained"
+
+
+#: causes without a place: the contact nonlinearity has to be carried by friction, Hertz stiffening or a clearance
+#: (with the located element causes a softer seat is named as the spherical joint, and no clearance is tried)
+NONLOCATED = ("friction_hysteresis", "clearance", "hertz_stiffening", "link_modulus", "actuation_compliance")
+
+
+def test_contact_nonlinearity_without_clearance_is_not_named_clearance(case, model):
+    """A ball seat of U(0.22, 0.30) GPa instead of 0.8 GPa (a Hertz contact softer and more nonlinear than modelled)
+    and U(1.5, 2.5) N of friction, no dead band: before the check, ``clearance`` (a ~40 um band closed at a few N)
+    was named with friction at probability 0.98. The dead band is not needed beyond friction and Hertz stiffening:
+    not named, and the answer says why."""
+    rng = np.random.default_rng(36)
+    world = {"friction": float(rng.uniform(1.5, 2.5)),
+             "case_params": {"materials.uhmwpe.E_Pa": float(rng.uniform(0.22e9, 0.30e9))}}
+    r = process(dial_campaign(case, world, seed=int(rng.integers(100))).data, case)
+    d = diagnose(model, r, candidates=NONLOCATED, with_baseline=False)
+    assert "clearance" not in {c.id for c in d.causes}, d.causes
+    check = d.as_json()["clearance_check"]
+    assert check is not None and not check["needed"]
+    assert {"friction_hysteresis", "hertz_stiffening"} <= set(check["beyond"])
+    assert "stands in for contact nonlinearity" in d.weighing.ambiguity
+
+
+def test_a_true_dead_band_is_still_named_clearance(case, model):
+    """Positive control: a dead band of U(40, 60) um per axis closed at U(3, 5) N, with 1.5 N of friction (the
+    diagnosis's own laws, the virtual experiment): clearance is needed beyond friction and Hertz stiffening."""
+    from femcheck.experiment.simulate import simulate
+    rng = np.random.default_rng(37)
+    gap = {f"gap_{a}_m": float(rng.uniform(4e-5, 6e-5)) for a in "xyz"}
+    hidden = [("clearance", {**gap, "closing_force_N": float(rng.uniform(3.0, 5.0))}),
+              ("friction_hysteresis", {"friction_N": 1.5})]
+    r = process(simulate(case, hidden, seed=int(rng.integers(100)), directions=("+x", "+y", "+z")).data, case)
+    d = diagnose(model, r, candidates=NONLOCATED, with_baseline=False)
+    assert "clearance" in {c.id for c in d.causes}, d.causes
+    assert d.as_json()["clearance_check"]["needed"]
