@@ -167,14 +167,12 @@ def summarize(rows: list) -> dict:
 
 
 def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1) -> dict:
-    seeds = list(range(seed, seed + n_worlds))
-    if jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-        with ProcessPoolExecutor(jobs) as ex:
-            rows = list(ex.map(run_world, seeds))
-    else:
-        rows = [run_world(s) for s in seeds]
-    return summarize(rows)
+    from concurrent.futures import ProcessPoolExecutor
+    seeds = range(seed, seed + n_worlds)
+    if jobs <= 1:
+        return summarize([run_world(s) for s in seeds])
+    with ProcessPoolExecutor(jobs) as ex:   # one world per process: each diagnosis is single-threaded
+        return summarize(list(ex.map(run_world, seeds)))
 
 
 def main(argv=None) -> int:
