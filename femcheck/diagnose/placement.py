@@ -11,10 +11,11 @@ diagnosis):
 3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
    subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
    chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
-4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given). A
-   lowest score at all six legs does not rule the type out (it once did, as "an all-legs change"): with the
-   prior's leg factors N(1, 1) a leg can be near rigid (0.03), far from the linearization at 1, and the six free
-   legs then always fit the linear model best; step 5 (at most five legs) decides;
+4. the lowest score on that path, or that of the element changed alike in all legs (one factor: the six columns
+   summed, chi^2_lin + ln N), ranks the element type (the empty subset scores chi^2 of the model as given). A
+   lowest score at all six free legs is not taken as it is: with the prior's leg factors N(1, 1) a leg can be near
+   rigid (0.03), far from the linearization at 1, and the six free legs then always fit the linear model best;
+   step 5 decides;
 5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
    (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
    element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
