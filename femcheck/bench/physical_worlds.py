@@ -32,8 +32,9 @@ the actuation; the whole-device ids their elements: ``link_modulus`` guideway + 
 - ``wrong_whole_leg``: ``leg_softening`` is named;
 - ``legs_right``: the named located cause of the first changed element holds exactly its legs.
 
-Figures: the rates over the worlds (and over singles and pairs), a confusion matrix {changed element: {first named
-element: count}}, each world's row, CPU per world. ``python -m femcheck.bench physical_worlds`` (``WORLDS`` worlds,
+Figures: the rates over the worlds (and over singles and pairs), the confusion matrix of the single changes
+{changed element: {first named element: count}}, the pairs {changed elements: {named elements: count}}, each world's
+row, CPU per world. ``python -m femcheck.bench physical_worlds`` (``WORLDS`` worlds,
 seed 2026) or ``python -m femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
 """
 from __future__ import annotations
@@ -121,8 +122,10 @@ def score(changes: list, causes: list) -> dict:
     right_first = len(first) == 1 and first[0] in truth
     own = {el for _, els, _ in named if len(els) == 1 for el in els}
     first_change = changes[0]
-    legs_right = any(len(els) == 1 and els[0] == first_change["element"] and sorted(legs) == first_change["legs"]
-                     for _, els, legs in named)
+    # actuation_compliance is the actuation changed alike in all six legs
+    legs_right = any(len(els) == 1 and els[0] == first_change["element"]
+                     and sorted(legs or (range(6) if n == "actuation_compliance" else [])) == first_change["legs"]
+                     for n, els, legs in named)
     return {"named": [n for n, _, _ in named], "first_element": "+".join(first),
             "right_element_first": bool(right_first), "both_named": bool(set(truth) <= own),
             "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right)}
@@ -148,11 +151,15 @@ def summarize(rows: list) -> dict:
     singles = [r for r in rows if len(r["changes"]) == 1]
     pairs = [r for r in rows if len(r["changes"]) == 2]
     rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
-    confusion = {}
-    for r in rows:
-        for ch in r["changes"][:1] if len(r["changes"]) == 1 else r["changes"]:
-            row = confusion.setdefault(ch["element"], {})
-            row[r["first_element"]] = row.get(r["first_element"], 0) + 1
+    confusion, named_pairs = {}, {}
+    for r in singles:
+        row = confusion.setdefault(r["changes"][0]["element"], {})
+        row[r["first_element"]] = row.get(r["first_element"], 0) + 1
+    for r in pairs:   # changed elements -> the elements named (each cause's, in order)
+        key = "+".join(sorted(c["element"] for c in r["changes"]))
+        got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
+        row = named_pairs.setdefault(key, {})
+        row[got] = row.get(got, 0) + 1
     return {"worlds": len(rows), "singles": len(singles), "pairs": len(pairs),
             "right_element_first_rate": rate(rows, "right_element_first"),
             "right_element_first_rate_singles": rate(singles, "right_element_first"),
@@ -163,7 +170,8 @@ def summarize(rows: list) -> dict:
             "explained_rate": rate([{"x": r["verdict"] == "explained"} for r in rows], "x"),
             "cpu_per_world_s_median": round(float(np.median([r["cpu_s"] for r in rows])), 2) if rows else None,
             "world": "detailed analytical chain of the modified case (not the device FE; module docstring)",
-            "confusion_changed_element_vs_first_named": confusion, "rows": rows}
+            "confusion_singles_changed_vs_first_named": confusion, "pairs_changed_vs_named": named_pairs,
+            "rows": rows}
 
 
 def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1) -> dict:

@@ -556,7 +556,8 @@ def clearance_needed(model, readings, chosen, fit: FitResult, folds, threshold: 
                         starts=[np.concatenate(list(f_bg.values) + [fit.values[i_c]])])
     if f_all.chi2 > fit.chi2 + f_bg.chi2:   # never worse than the background alone
         f_all = fit_effects(model, readings, background + [clearance])
-    gain_cv = cross_validate(model, readings, background, f_bg, folds).chi2         - cross_validate(model, readings, background + [clearance], f_all, folds).chi2
+    gain_cv = (cross_validate(model, readings, background, f_bg, folds).chi2
+               - cross_validate(model, readings, background + [clearance], f_all, folds).chi2)
     gain_bic = f_bg.bic - f_all.bic
     return {"needed": bool(gain_cv > threshold and gain_bic > bic_margin), "beyond": [e.id for e in background],
             "heldout_chi2_gain": float(gain_cv), "bic_gain": float(gain_bic), "threshold_chi2": float(threshold)}
@@ -577,7 +578,6 @@ def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_
     other partner at its values *in the pair*, and the pair is refitted jointly from the screened leg scales; with two
     located partners they alternate, ``rounds`` times or until the placements stop changing. Every new pair joins the
     rivals and is weighed like the others (its extended-BIC penalty included). Returns (placements, explanations)."""
-    n_data = 3 * readings.n_states
     have = {frozenset(ex.payload.effects) for ex in rivals if ex.payload is not None}
     pairs = sorted((ex for ex in rivals if ex.payload is not None and len(ex.payload.effects) == 2
                     and any(e.located for e in ex.payload.effects)), key=lambda ex: ex.payload.bic)[:top]
@@ -586,10 +586,13 @@ def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_
         fit = ex.payload
         for _ in range(rounds):
             changed = False
-            for i, eff in enumerate(fit.effects):
-                if not eff.located:
-                    continue
-                other = fit.effects[1 - i]
+            # each located partner placed again with the other in place; a non-located partner (a whole-leg factor
+            # that took one leg's change of another element) replaced by the placement screened with the located
+            # partner in place
+            moves = [(i, fit.effects[1 - i]) for i, e in enumerate(fit.effects) if e.located]
+            moves += [(1 - i, e) for i, e in enumerate(fit.effects) if e.located and not fit.effects[1 - i].located]
+            for i, other in moves:
+                eff = fit.effects[i]
                 screened = screen_placements(model, readings, located, keep=1,
                                              background=([other], [fit.values[1 - i]]))
                 if not screened or screened[0].effect == eff or screened[0].effect.id == other.id:
