@@ -273,7 +273,7 @@ def test_linearized_placement_evidence_is_the_gaussian_marginal_likelihood():
     """:func:`subset_scores` against the closed form: for r0 = G_L x + e, x ~ N(0, W^2), e ~ N(0, I), the evidence is
     the density of r0 under N(0, I + G_L W^2 G_L^T) (Bishop PRML eq. 3.86); the chi^2 is that of the ridge (MAP)
     step, solved here with the normal equations written out. Random G,
-    residual, prior widths and subsets (all 62 placements checked)."""
+    residual, prior widths and subsets (all 63 placements checked, all six legs included)."""
     from scipy import stats
 
     from femcheck.diagnose.placement import subset_scores
@@ -284,7 +284,7 @@ def test_linearized_placement_evidence_is_the_gaussian_marginal_likelihood():
         r0 = rng.normal(size=n) * rng.uniform(1.0, 3.0)
         sd = rng.uniform(0.3, 2.0, size=6)
         subsets, sc = subset_scores(G, r0, sd, np.zeros(6), n)
-        assert len(subsets) == 62
+        assert len(subsets) == 63   # 2^6 - 1 non-empty leg sets
         for i, L in enumerate(subsets):
             GL = G[:, list(L)]
             cov = np.eye(n) + GL @ np.diag(sd[list(L)] ** 2) @ GL.T

@@ -11,19 +11,27 @@ diagnosis):
 3. **backward elimination**: drop the leg with the smallest |t| = |b_i| / se_i, refit, until one leg is left; each
    subset L on that path (6, 5, ..., 1 legs) and the empty one is scored by its linearized extended BIC
    chi^2_lin(L) + |L| ln N + 2 ln C(6, |L|);
-4. the lowest score on that path ranks the element type (the empty subset scores chi^2 of the model as given). A
-   lowest score at all six legs does not rule the type out (it once did, as "an all-legs change"): with the
-   prior's leg factors N(1, 1) a leg can be near rigid (0.03), far from the linearization at 1, and the six free
-   legs then always fit the linear model best; step 5 (at most five legs) decides;
+4. the lowest score on that path, or that of the element changed alike in all legs (one factor: the six columns
+   summed, chi^2_lin + ln N), ranks the element type (the empty subset scores chi^2 of the model as given). A
+   lowest score at all six free legs is not taken as it is: with the prior's leg factors N(1, 1) a leg can be near
+   rigid (0.03), far from the linearization at 1, and the six free legs then always fit the linear model best;
+   step 5 decides;
 5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
    (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
    element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
    selection, adding the leg whose linearized step lowers chi^2 most at the current point, then three Gauss-Newton
    steps of the active legs (scales >= 0; one batched evaluation of 7 x m states each), scored by the extended BIC;
-   up to five legs (six is the element's all-legs cause, e.g. ``actuation_compliance``, not a located one), stopping
+   up to all six legs (the element changed in every leg is a placement like the others, e.g. proximal-link tubes of
+   a softer alloy: it is this element alone, where the whole-device ids move several elements at once), stopping
    after three steps that do not improve the score; then backward pruning of that subset (drop the leg whose removal
    lowers the score most, refit, while the score falls), since neighbouring legs' elements are alike and the forward
    path can take one too many.
+
+Beside the leg set, each refined type is fitted changed alike in all six legs (5'.: one factor, Gauss-Newton on it,
+scored chi^2 + ln N; :meth:`~femcheck.diagnose.effects._located.ElementInLegs.uniform_all`): a placement of its own,
+so that an element changed in every leg (a softer tube alloy, thinner pins) is weighed with one parameter, like
+the whole-device causes it competes with, and not with six. Not for the actuation, whose uniform change is the
+vocabulary's ``actuation_compliance`` (the same law: two ids for it would split its mass).
 
 The placements within ``margin`` of the best refined score (the diagnosis takes its ``max_located`` best; it refines
 at least three types, since the linear ranking can put the wrong type first) then enter the diagnosis as ordinary
@@ -162,7 +170,7 @@ def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
     x = x0.copy()
     r, G = _state(bg, eff, x)
     active, best, worse, best_x = [], (score_none, ()), 0, x.copy()
-    while len(active) < 5 and worse < 3:
+    while len(active) < 6 and worse < 3:
         trial = []
         for leg in set(range(6)) - set(active):
             cols = active + [leg]
@@ -196,6 +204,21 @@ def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
     return best, best_x
 
 
+def _uniform(bg: _Background, eff, iters: int = 6) -> tuple[float, float]:
+    """(chi^2, factor) of the element ``eff`` changed alike in all six legs (one factor, ``ElementInLegs.uniform_all``):
+    Gauss-Newton on the common factor from the background's value (one batched evaluation of 2 x m states each)."""
+    readings = bg.readings
+    a = float(bg.neutral(eff.column).mean())
+    for _ in range(iters + 1):
+        d = bg(eff.column, np.array([np.full(6, a), np.full(6, a + _STEP)]))
+        r = ((readings.disp - d[0]) / readings.sigma).ravel()
+        if _ == iters:
+            break
+        g = ((d[1] - d[0]) / _STEP / readings.sigma).ravel()
+        a = max(a + float(g @ r) / max(float(g @ g), 1e-300), 0.0)
+    return float(r @ r), a
+
+
 def screen_placements(model, readings, located, keep: int = 3, margin: float = 10.0,
                       background=None) -> list[Placement]:
     """The best placement of each effect of ``located`` (see module doc), best first: those within ``margin`` of the
@@ -217,7 +240,9 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
         legs = list(range(6))
         b, chi2, se = _lstsq(G, r0)
         t_full = tuple(float(x) for x in b / se)
-        best = (chi2_0, ())
+        # the element changed alike in all legs: one parameter, the sum of the six legs' columns
+        _, chi2_u, _ = _lstsq(G.sum(axis=1, keepdims=True), r0)
+        best = min((chi2_0, ()), (chi2_u + math.log(N), tuple(range(6))))
         while legs:
             best = min(best, (ebic(chi2, len(legs)), tuple(legs)))
             if len(legs) == 1:
@@ -230,12 +255,17 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
     for score_lin, eff, t_full, _n_legs in linear[:keep]:
         if score_lin > linear[0][0] + margin or score_lin >= chi2_0:
             break
-        # a linear minimum at all six legs is not an all-legs change: a leg scale far from 1 (a near-rigid element,
+        # a linear minimum at all six legs is not taken as it is: a leg scale far from 1 (a near-rigid element,
         # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward
-        # selection decides, capped at five legs (six is the element's all-legs cause, weighed as its own effect)
+        # selection decides, up to all six legs
         (score, legs), x = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
         if legs:
             out.append(Placement(eff.restricted(legs), score, chi2_0, t_full, tuple(float(x[i]) for i in legs)))
+        if eff.uniform_cause is not None:   # e.g. actuation_compliance: that cause weighs the uniform change
+            continue
+        chi2_u, a = _uniform(bg, eff)   # 5'. all legs, one factor: weighed beside the leg set (its own placement)
+        if chi2_u + math.log(N) < chi2_0:
+            out.append(Placement(eff.uniform_all(), chi2_u + math.log(N), chi2_0, t_full, (a,)))
     out.sort(key=lambda p: p.score)
     return [p for p in out if p.score <= out[0].score + margin] if out else []
 
@@ -248,9 +278,8 @@ NONLINEAR_MARGIN = 20.0
 #: the chain's response to a compliance scale is smooth, its second-order term ~ step^2 / 2 of the first
 LINEAR_STEP = 0.25
 
-#: every placement a located cause can take: the non-empty leg subsets of at most five legs (six legs is the
-#: element's all-legs cause), grouped by size
-SUBSETS_BY_SIZE = {k: np.array(list(itertools.combinations(range(6), k)), int) for k in range(1, 6)}
+#: every placement a located cause can take: the non-empty leg subsets, all six legs included, grouped by size
+SUBSETS_BY_SIZE = {k: np.array(list(itertools.combinations(range(6), k)), int) for k in range(1, 7)}
 
 
 def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.ndarray, n_data: int,
@@ -287,7 +316,7 @@ def subset_scores(G: np.ndarray, r0: np.ndarray, sd: np.ndarray, log_mass: np.nd
     the correction; the linear score is exact for the small steps where a type is close, and a large change is
     fitted by the screen).
 
-    Returns (subsets, scores): the (n_subsets,) leg tuples (1..5 legs, in :data:`SUBSETS_BY_SIZE` order) and
+    Returns (subsets, scores): the (n_subsets,) leg tuples (1..6 legs, in :data:`SUBSETS_BY_SIZE` order) and
     {(method, likelihood): (n_subsets,) scores, "chi2": (n_subsets,) chi^2_L}. One batched solve per subset size."""
     from scipy.optimize import lsq_linear
 

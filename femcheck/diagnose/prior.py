@@ -30,7 +30,8 @@ missing_compliance         three element scales                   0 (half-normal
 =========================  =====================================  =========================  =================
 
 A located effect's placement (k legs of 6) has the prior 1 / C(6, k) per subset (its extended-BIC term,
-``ElementInLegs.penalty``), i.e. every number of legs is equally likely; :func:`draw_truth` draws k uniformly in 1..5.
+``ElementInLegs.penalty``), i.e. every number of legs is equally likely; :func:`draw_truth` draws k uniformly in 1..6
+(all six legs is a placement like the others: the element changed in every leg).
 """
 from __future__ import annotations
 
@@ -99,9 +100,9 @@ def draw_values(effect, model, rng) -> dict[str, float]:
 
 def draw_truth(effect, model, rng):
     """(effect id, {param: value}) of a hidden truth drawn from the prior: for a located effect (``Effect.located``)
-    first the legs (k uniform in 1..5, then k legs uniformly), then their values."""
+    first the legs (k uniform in 1..6, then k legs uniformly), then their values."""
     if getattr(effect, "located", False):
-        k = int(rng.integers(1, 6))
+        k = int(rng.integers(1, 7))
         legs = sorted(int(i) for i in rng.choice(6, size=k, replace=False))
         effect = effect.restricted(legs)
     return effect.id, draw_values(effect, model, rng)

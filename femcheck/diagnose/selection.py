@@ -113,6 +113,8 @@ class Diagnosis:
     collinear: tuple = ()
     #: where sigma came from when no trial repeats (:func:`sigma_from_richest_rival`); "" when from the trials
     sigma_note: str = ""
+    #: :func:`clearance_needed` when the search named a clearance (None otherwise)
+    clearance_check: dict | None = None
 
     @property
     def verdict(self) -> str:
@@ -204,11 +206,14 @@ class Diagnosis:
                 "noise_threshold_chi2": self.noise_threshold,
                 "baseline_weight_fit_heldout_error": self.baseline_error,
                 "folds": [list(f) for f in self.folds], "warnings": list(self.warnings),
+                "clearance_check": self.clearance_check,
                 "steps": list(self.steps),
                 "placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
-                                "screen_ebic_none": p.score_none, "t_per_leg": list(p.t)} for p in self.placements],
+                                "screen_ebic_none": p.score_none, "t_per_leg": list(p.t), "one_factor": p.effect.uniform}
+                               for p in self.placements],
                 "partner_placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
-                                        "screen_ebic_none": p.score_none} for p in self.partner_placements]}
+                                        "screen_ebic_none": p.score_none, "one_factor": p.effect.uniform}
+                                       for p in self.partner_placements]}
 
 
 def sigma_source(readings, rival_note: str = "") -> str:
@@ -524,6 +529,92 @@ def located_partners(model, readings, located, screened, rivals, *, n_leads: int
     return new, out
 
 
+#: the causes for the contact nonlinearity the detailed model has (friction in the joints and guides, Hertz contact
+#: laws): a dead band (``clearance``) is named only when it is needed beyond them (:func:`clearance_needed`)
+CONTACT_NONLINEARITY = ("friction_hysteresis", "hertz_stiffening")
+
+
+def clearance_needed(model, readings, chosen, fit: FitResult, folds, threshold: float, bic_margin: float) -> dict:
+    """Whether the ``clearance`` of the named explanation ``chosen`` is needed beyond the frictional and Hertz
+    nonlinearity.
+
+    A dead band closed by a force adds deflection at small loads and little at large ones; so does a Hertz contact
+    law stiffer than modelled, and friction in the joints makes small loads stick. On data whose nonlinearity is the
+    contact's own, a ``clearance`` of ~10 um closed at a few N fits it as well as they do, and was named in their
+    place. Here the other named causes plus :data:`CONTACT_NONLINEARITY` (those not named, fitted with them) are the
+    background; clearance must then still lower the held-out chi^2 by more than the noise ``threshold``
+    (2 sqrt(2 N_heldout), as a selection step) *and* the BIC by ``bic_margin``. Returns {"needed": bool, the
+    background's ids, the held-out chi^2 and BIC gains}."""
+    reg = effect_registry()
+    clearance = next(e for e in chosen if e.id == "clearance")
+    others = [e for e in chosen if e is not clearance]
+    background = others + [reg[i] for i in CONTACT_NONLINEARITY
+                           if i in reg and reg[i].applicable(model) and all(e.id != i for e in others)]
+    f_bg = fit_effects(model, readings, background)
+    i_c = list(fit.effects).index(clearance)
+    f_all = fit_effects(model, readings, background + [clearance],
+                        starts=[np.concatenate(list(f_bg.values) + [fit.values[i_c]])])
+    if f_all.chi2 > fit.chi2 + f_bg.chi2:   # never worse than the background alone
+        f_all = fit_effects(model, readings, background + [clearance])
+    gain_cv = (cross_validate(model, readings, background, f_bg, folds).chi2
+               - cross_validate(model, readings, background + [clearance], f_all, folds).chi2)
+    gain_bic = f_bg.bic - f_all.bic
+    return {"needed": bool(gain_cv > threshold and gain_bic > bic_margin), "beyond": [e.id for e in background],
+            "heldout_chi2_gain": float(gain_cv), "bic_gain": float(gain_bic), "threshold_chi2": float(threshold)}
+
+
+#: the best pairs holding a located cause whose placements are refitted together (:func:`refit_pair_placements`)
+REFIT_PAIRS = 3
+
+
+def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_PAIRS, rounds: int = 2) -> tuple[list, list]:
+    """Pairs whose located placement is chosen again with the partner in place: not a greedy first pick.
+
+    A placement is screened on the residual of the model as given (or of one lead), where a second cause's signature
+    is still in it: the legs it takes then partly fit that other cause (a guideway placed on five legs with odd factors
+    where the guideways of all legs and the cables are softer), and the pair fitted from it stays there. For each of the
+    ``top`` best pairs of ``rivals`` (by BIC) that hold a located cause, the placement of each located partner is
+    screened again (:func:`femcheck.diagnose.placement.screen_placements`, every element type) on the background of the
+    other partner at its values *in the pair*, and the pair is refitted jointly from the screened leg scales; with two
+    located partners they alternate, ``rounds`` times or until the placements stop changing. Every new pair joins the
+    rivals and is weighed like the others (its extended-BIC penalty included). Returns (placements, explanations)."""
+    have = {frozenset(ex.payload.effects) for ex in rivals if ex.payload is not None}
+    pairs = sorted((ex for ex in rivals if ex.payload is not None and len(ex.payload.effects) == 2
+                    and any(e.located for e in ex.payload.effects)), key=lambda ex: ex.payload.bic)[:top]
+    placements, out = [], []
+    for ex in pairs:
+        fit = ex.payload
+        for _ in range(rounds):
+            changed = False
+            # each located partner placed again with the other in place; a non-located partner (a whole-leg factor
+            # that took one leg's change of another element) replaced by the placement screened with the located
+            # partner in place
+            moves = [(i, fit.effects[1 - i]) for i, e in enumerate(fit.effects) if e.located]
+            moves += [(1 - i, e) for i, e in enumerate(fit.effects) if e.located and not fit.effects[1 - i].located]
+            for i, other in moves:
+                eff = fit.effects[i]
+                screened = screen_placements(model, readings, located, keep=1,
+                                             background=([other], [fit.values[1 - i]]))
+                if not screened or screened[0].effect == eff or screened[0].effect.id == other.id:
+                    continue
+                p = screened[0]
+                key = frozenset([other, p.effect])
+                if key in have:
+                    continue
+                start = np.concatenate([fit.values[1 - i], np.asarray(p.values, float)])
+                new = fit_effects(model, readings, [other, p.effect], starts=[start], max_nfev=100)
+                have.add(key)
+                placements.append(p)
+                out.append(_explanation(new))
+                if new.bic < fit.bic:
+                    fit, changed = new, True
+                    break
+            if not changed:
+                break
+    log.info("pair placements refitted together: %d new pairs", len(out))
+    return placements, out
+
+
 #: seconds per unit of each phase of :func:`diagnose` (the reference case, 9 points x 6 directions, the whole
 #: effect library; measured phase by phase on the shared 2-core machine with the compiled kernels cached, 67 s
 #: in all): screening one located effect's placements, one fit of the model as given per fold, one candidate
@@ -716,6 +807,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                                            n_leads=partner_leads if max_effects >= 2 and rivals_pairs else 0,
                                            bic_margin=bic_margin, siblings=located_siblings)
         rivals += extra
+        if max_effects >= 2 and rivals_pairs:
+            refit, extra = refit_pair_placements(model, readings, located, rivals)
+            partners += refit
+            rivals += extra
     if located and max_located > 0 and unweighed_mass:
         leads = _partner_leads(rivals, partner_leads, bic_margin) if max_effects >= 2 and rivals_pairs else []
         rivals += unweighed_explanations(model, readings, located, rivals, leads)
@@ -742,6 +837,26 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         greedy_ids = tuple(e.id for e in chosen)
         w = evidence.weigh(rivals, 3 * readings.n_states, chosen=lead, sigma_dof=readings.sigma_dof,
                            method=evidence_method, likelihood=likelihood)
+    clearance_check = None
+    if any(e.id == "clearance" for e in chosen):
+        clearance_check = clearance_needed(model, readings, chosen, cur_fit, folds, threshold, bic_margin)
+        if not clearance_check["needed"]:
+            # the dead band stands in for contact nonlinearity: name the evidence leader among the explanations
+            # without a clearance
+            lead = max(((p, ex) for p, ex in zip(w.probability, w.explanations)
+                        if ex.payload is not None and "clearance" not in ex.ids), key=lambda t: t[0])[1]
+            log.info("clearance not needed beyond %s: naming %s", "+".join(clearance_check["beyond"]), lead.name)
+            chosen, cur_fit = list(lead.payload.effects), lead.payload
+            cur_cv = cross_validate(model, readings, chosen, cur_fit, folds) if chosen else cv_base
+            w = evidence.weigh(rivals, 3 * readings.n_states, chosen=lead, sigma_dof=readings.sigma_dof,
+                               method=evidence_method, likelihood=likelihood)
+            c = clearance_check
+            p_cl = float(sum(p for ex, p in zip(w.explanations, w.probability) if "clearance" in ex.ids))
+            w = dataclasses.replace(w, ambiguous=True, ambiguity=(w.ambiguity + "; " if w.ambiguity else "") + (
+                f"clearance (probability {p_cl:.2f} among the explanations weighed) is not needed beyond "
+                f"{' + '.join(c['beyond'])}: with them it lowers the held-out chi2 by {c['heldout_chi2_gain']:.1f} "
+                f"(noise threshold {c['threshold_chi2']:.1f}) and the BIC by {c['bic_gain']:.1f}; its dead band "
+                f"stands in for contact nonlinearity, and is not named"))
     # structured lack of fit (femcheck.diagnose.lack_of_fit): a compliance-shaped residual that the overall chi^2
     # spreads over all readings. The verdict turns unexplained only when the named explanation *and* the best
     # explanation of the vocabulary (the evidence leader) both leave one: an effect below the held-out selection's
@@ -801,4 +916,5 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                      cv_before=cv_base, cv_after=cur_cv, steps=tuple(steps), folds=folds,
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
                      readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof,
-                     partner_placements=tuple(partners), collinear=tuple(collinear), sigma_note=rival_note)
+                     partner_placements=tuple(partners), collinear=tuple(collinear), sigma_note=rival_note,
+                     clearance_check=clearance_check)

@@ -9,6 +9,12 @@ device model instead:
   all follow it;
 - **weak guideway**: the guideway compliance of one leg is multiplied in the chain model
   (``femcheck.chain.evaluate``'s element scales);
+- **changed case parameters** (``case_params``, {dotted case key: value}): any section, pin, cable or material value
+  of the case, changed in the case itself (``Case.with_params``), so every element formula that reads it follows
+  (e.g. a thinner U-joint pin changes both its bending and its line contact; a thinner guideway both bending axes);
+- **element scales** (``element_scale``, {element key of ``femcheck.chain.ELEMENTS``: factor, or (6,) factors per
+  leg}): an element's compliance multiplied in the chain model, e.g. the proximal links' for a tube of half the
+  modulus (a cantilever's compliance is 1/E, and 1/G at a fixed Poisson ratio);
 - **sensor misalignment**: the dial frame is rotated by a rotation vector (``scipy.spatial.transform.Rotation``);
 - **friction**: Coulomb friction F_f at the TCP acting along the load direction: the force that deflects the device
   on loading is |F| - F_f; on unloading the device sticks at its peak deflection until the load has dropped by
@@ -45,14 +51,18 @@ class DialCampaign:
 
 
 def _true_translation(case, pose, force, *, modulus: float, guideway_leg: int | None, guideway: float,
-                      joints: str) -> np.ndarray:
+                      joints: str, case_params: dict | None = None, element_scale: dict | None = None) -> np.ndarray:
     """(r, 3) TCP translation (m) of the device under ``force`` (r, 3) N at ``pose`` (r, 6)."""
     if modulus != 1.0:
         E = next(m.E_Pa for m in case.materials if m.name == "aluminium")
         case = case.with_params(**{"materials.aluminium.E_Pa": E * modulus})
+    if case_params:
+        case = case.with_params(**case_params)
     scale = np.ones((6, len(ELEMENTS)))
+    for element, factor in (element_scale or {}).items():
+        scale[:, ELEMENTS.index(element)] *= np.broadcast_to(np.asarray(factor, float), (6,))
     if guideway_leg is not None:
-        scale[guideway_leg, ELEMENTS.index("lg")] = guideway
+        scale[guideway_leg, ELEMENTS.index("lg")] *= guideway
     W = np.zeros((len(pose), 6))
     W[:, :3] = force
     r = evaluate(case, pose, W, model="detailed", joints=joints, adjust=ChainAdjustments(element_scale=scale))
@@ -86,7 +96,8 @@ def _world(case, rows, poses, causes: dict, joints: str) -> np.ndarray:
     f = _deflecting_force(force, load, phase, point, direction, trial, causes.get("friction", 0.0))
     leg = causes.get("weak_guideway_leg")
     d = _true_translation(case, poses, f, modulus=causes.get("link_modulus", 1.0), guideway_leg=leg,
-                          guideway=causes.get("weak_guideway", 1.0), joints=joints)
+                          guideway=causes.get("weak_guideway", 1.0), joints=joints,
+                          case_params=causes.get("case_params"), element_scale=causes.get("element_scale"))
     theta = causes.get("sensor_misalignment")
     if theta is not None:
         d = d @ Rotation.from_rotvec(np.asarray(theta, float)).as_matrix().T
@@ -131,7 +142,8 @@ def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = N
     """Readings of a dial-gauge campaign on the device with hidden ``causes`` (module docstring).
 
     ``causes``: {"link_modulus": E_true / E_case, "weak_guideway": compliance factor, "weak_guideway_leg": leg index,
-    "sensor_misalignment": (3,) rotation vector rad, "friction": N}. ``snr``: a number (or {cause: number}) that
+    "sensor_misalignment": (3,) rotation vector rad, "friction": N, "case_params": {case key: value},
+    "element_scale": {element: factor or (6,) factors}} (the last two are not rescaled by ``snr``). ``snr``: a number (or {cause: number}) that
     rescales each named cause to that signal-to-noise ratio (the sensor rotation keeps its axis). Seeded."""
     rng = np.random.default_rng(seed)
     rows = protocol_rows(case, directions, trials, sweep)
@@ -151,5 +163,7 @@ def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = N
     read = resolution_m * np.round(read / resolution_m)
     text = format_measured_csv(point, direction, trial, phase, load, force, read, resolution_m=resolution_m,
                                meta={"case": case.meta.name, "case_sha256": case.sha256, "source": "dial campaign"})
-    truth = {k: (np.asarray(v, float).tolist() if k == "sensor_misalignment" else v) for k, v in causes.items()}
+    truth = {k: (np.asarray(v, float).tolist() if k == "sensor_misalignment" else
+                 {e: np.asarray(f, float).tolist() for e, f in v.items()} if k == "element_scale" else v)
+             for k, v in causes.items()}
     return DialCampaign(data=parse_measured_csv(text, "<dial campaign>"), truth=truth)

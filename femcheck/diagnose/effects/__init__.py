@@ -112,6 +112,31 @@ def get_effect(effect_id: str) -> Effect:
     return reg[effect_id]
 
 
+#: The vocabulary, by what each id moves in the chain (element compliances S_e,i of element e in leg i):
+#:
+#: ==========================  ==============================================================================
+#: id                          what it changes
+#: ==========================  ==============================================================================
+#: guideway_in_legs            the guideway of the legs named (any set, all six included; all six with one
+#:                             factor: the guideway alone changed alike in every leg, e.g. a thinner section)
+#: actuation_in_legs           the cable and motor of the legs named (alike in all six: actuation_compliance)
+#: spherical_joint_in_legs     the ball joint of the legs named (all six with one factor: the seat material)
+#: proximal_link_in_legs       the proximal link of the legs named (all six, one factor: the tube's alloy)
+#: universal_joint_in_legs     the U joint of the legs named (all six, one factor: thinner pins)
+#: actuation_compliance        the actuation of every leg, one factor
+#: link_modulus                guideways *and* proximal links of every leg, one factor (their shared material)
+#: joint_contact_compliance    spherical *and* universal joints of every leg, one factor
+#: leg_softening               every element of a leg, one factor per leg (a loose clamp of a whole chain)
+#: missing_compliance          elements the model level omits (simplified model), added back
+#: hertz_stiffening            the joints' contact law (force-dependent compliance)
+#: joint_rotation_release      a torsion spring in every passive joint rotation (the rigid idealization)
+#: clearance                   a dead band at the TCP, closed by a force
+#: friction_hysteresis         Coulomb friction at the TCP (unload readings stick)
+#: sensor_misalignment         the reading frame rotated
+#: ==========================  ==============================================================================
+#:
+#: The whole-device ids move several elements at once; a single element changed in every leg is its own
+#: ``<element>_in_legs`` on all legs. Both are weighed: the evidence decides.
 VOCABULARY = ("joint_contact_compliance", "actuation_compliance", "clearance", "hertz_stiffening", "leg_softening",
               "link_modulus", "friction_hysteresis", "sensor_misalignment", "joint_rotation_release",
               "guideway_in_legs", "actuation_in_legs", "spherical_joint_in_legs", "proximal_link_in_legs",

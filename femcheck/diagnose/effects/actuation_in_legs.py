@@ -5,4 +5,4 @@ joint or a loose clamp in those legs: S_act,i -> leg_i S_act,i for the legs i na
 """
 from femcheck.diagnose.effects._located import ElementInLegs
 
-EFFECT = ElementInLegs("act", "actuation_in_legs")
+EFFECT = ElementInLegs("act", "actuation_in_legs", uniform_cause="actuation_compliance")

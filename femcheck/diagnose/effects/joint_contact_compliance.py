@@ -5,6 +5,10 @@ than modelled, or missing from the model (the simplified model of seed 000 has n
 Parameter ``scale`` (-): the compliance of every S and U joint relative to the case's contact formulas,
 ``S_sp,i -> scale S_sp,i``, ``S_uj,i -> scale S_uj,i`` (1 = as in the detailed model, 0 = rigid joints).
 It replaces the model's own value, so it also adds the joints to a simplified model.
+
+A whole-device cause: both joint types at once, by one factor. One joint type changed alone (thinner U-joint pins,
+a softer ball seat) is ``universal_joint_in_legs`` or ``spherical_joint_in_legs`` on all legs (one factor); the
+evidence decides between them.
 """
 import numpy as np
 

@@ -4,6 +4,10 @@ tube or a slack cable in that leg. Every element compliance of chain i is multip
     S_e,i -> leg_i S_e,i     (e = guideway, actuation, joints, proximal link; leg_i >= 1).
 
 The location is the list of legs whose factor is clearly above 1 (lower 95 % bound > 1.05).
+
+A whole-leg cause: every element of a leg by the same factor (a loose clamp of the whole chain). One element type
+changed in some legs is ``<element>_in_legs``; two element types changed (a thinner guideway and a softer cable) are
+a pair of element causes, with their own factors; the evidence decides between them.
 """
 import numpy as np
 

@@ -3,6 +3,10 @@ or a composite tube). Guideway and proximal-link compliances (Euler-Bernoulli ca
 eqs. 24-27) scale as 1/E (and 1/G at a fixed Poisson ratio), so
 
     S_lg,i -> S_lg,i / f,     S_prox,i -> S_prox,i / f,     f = E_true / E_case   (parameter ``E_factor``).
+
+A whole-device cause: it moves two element types at once, the guideways *and* the proximal links (one material).
+One of them changed alone in every leg is ``guideway_in_legs`` or ``proximal_link_in_legs`` on all legs (one
+factor); the evidence decides between them.
 """
 import numpy as np
 
