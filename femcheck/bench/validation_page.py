@@ -53,6 +53,9 @@ AREA_TEXT = {
     "monolithic_leg": "One complete leg as one contact FE model against the substructured leg.",
     "parallel_device": "The general parallel-device model against the dedicated 6-PSU kernel on the same poses: "
                        "throughput of the compiled and numpy paths.",
+    "physical_worlds": "The diagnosis of the reference device against physically modified copies of its case "
+                       "(material, section, pin radius, cable modulus; one leg or all; singles and pairs; the "
+                       "modified case's detailed chain is the world): element confusion and the rates of right answers.",
     "serial_diagnose": "The self-weight diagnosis of serial robots: wall time on a 19-joint tree and the rates of right "
                        "answers on generated robots.",
     "solvers": "Every available sparse direct solver on three of femcheck's own systems: time and residual, each as a "
@@ -99,6 +102,11 @@ def load_figures(bench_dir: Path = BENCH_DIR) -> dict[str, dict]:
     return {p.stem: json.loads(p.read_text(encoding="utf-8")) for p in sorted(bench_dir.glob("*.json"))}
 
 
+def is_figure(value) -> bool:
+    """A figure the page shows: a number, a flag or a short text (lists and tables of cases stay in the JSON)."""
+    return not isinstance(value, (dict, list, tuple))
+
+
 def render(figures: dict[str, dict]) -> str:
     """The page's Markdown text for ``{area: figures}``."""
     lines = [
@@ -122,11 +130,14 @@ def render(figures: dict[str, dict]) -> str:
         summary = _summary(area)
         lines += [(summary + " " if summary else "") + f"Command: `python -m femcheck.bench {area}`. Machine: {machine}."
                   + (f" Wall time of the area: {format_value(fig['bench_wall_s'])} s." if "bench_wall_s" in fig else ""),
-                  "", "| figure | value | figure | value |", "| --- | --- | --- | --- |"]
-        cells = [_cell(k, v) for k, v in fig.items() if k not in MACHINE_KEYS]
-        # two figures per row, in the JSON's order down the rows: the page stays short for the big areas
-        lines += ["| " + " | ".join(pair) + (" | | |" if len(pair) == 1 else " |")
-                  for pair in (cells[i:i + 2] for i in range(0, len(cells), 2))]
+                  "", "| figure | value | figure | value | figure | value |", "| --- | --- | --- | --- | --- | --- |"]
+        cells = [_cell(k, v) for k, v in fig.items() if k not in MACHINE_KEYS and is_figure(v)]
+        detail = [k for k, v in fig.items() if k not in MACHINE_KEYS and not is_figure(v)]
+        # three figures per row, in the JSON's order down the rows: the page stays short for the big areas
+        lines += ["| " + " | ".join(group) + " | |" * (3 - len(group)) + " |"
+                  for group in (cells[i:i + 3] for i in range(0, len(cells), 3))]
+        if detail:
+            lines += ["", "Per-case detail in the JSON: " + ", ".join(f"`{k}`" for k in detail) + "."]
         lines.append("")
     return "\n".join(lines)
 
