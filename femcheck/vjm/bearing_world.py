@@ -43,7 +43,25 @@ This module builds the same arm from data that no VJM chose:
   origin along the axis to the bearing (housing) and from the bearing along the DH path to the next joint.
 
 Nothing here is set from seed 002's results or from the VJM case's springs; what the world's torsion share and
-the identified models' errors come out to is a result. The idealizations (rigid bearing rings, load-independent
+the identified models' errors come out to is a result.
+
+How seed 002's protocol is read (sec. IV-A), choice by choice:
+
+* **Loads and measurement.** The seed fixes the base, applies the external wrench at the end point in the base
+  frame and measures the end point's displacement in the base frame. Its FE model is linear (drives and bearings
+  "set to nominal value"), so there a wrench alone and a wrench on top of the self-weight, zeroed in the pose,
+  measure the same thing. A real arm's drives are not linear and always carry the arm's weight: the world
+  applies the self-weight in the drives' torque and measures the wrench's part (loaded minus self-weight state),
+  which is the seed's measurement on an arm that has weight.
+* **Drives.** The catalogue's piecewise law, not one "nominal" value: the law is cited data, and a constant
+  spring per joint is what both VJMs assume. :func:`with_nominal_drives` gives the seed's linear FE reading
+  (constant K3, the stiffness the actuator tables list alone) as a variant.
+* **Bearings.** The ISO 76 / line-contact estimate above. The catalogue's own tilting-moment stiffness of the
+  output bearing (table 55.1, K_B) would replace it, with the axial springs on the pitch circle set to give it;
+  that value is not in femcheck's data, so it is not used. The estimate is stiffer than a mounted bearing; how far the result depends
+  on it is bracketed with :func:`with_softer_structure` (the halving needs bearings about 37 times softer).
+* **Links and housings.** The beam world's tubes (:func:`cobot7_world`), femcheck's choice, bracketed the same way
+  (the halving needs tubes about 4.9 times softer). The idealizations (rigid bearing rings, load-independent
 line contact, no clearance or preload dependence) make the bearings stiffer than a mounted catalogue bearing.
 The drives' hysteresis loss and lost motion (listed beside the stiffness, up to 1 arcmin each) are left out:
 the law is the catalogue's one curve for loading in both directions.
@@ -129,3 +147,22 @@ def cobot7_bearings_world(case, **overrides) -> BeamWorld:
                      for s, flange, b in zip(COBOT7_SIZES, COBOT7_FLANGE_M, base.bearings))
     world = dataclasses.replace(base, bearings=bearings)
     return dataclasses.replace(world, **overrides) if overrides else world
+
+
+def with_nominal_drives(world: BeamWorld) -> BeamWorld:
+    """The same world with each drive a constant spring of its catalogue K3 (the "nominal value" of seed 002's
+    linear FE model, sec. IV-A) instead of its piecewise law; ``world`` is unchanged."""
+    return dataclasses.replace(world, bearings=tuple(dataclasses.replace(b, torsion_curve=None) for b in world.bearings))
+
+
+def with_softer_structure(world: BeamWorld, bearings: float = 1.0, links: float = 1.0) -> BeamWorld:
+    """The same world with every bearing's radial, axial and tilt stiffness divided by ``bearings`` and every
+    link tube's Young's modulus (so its shear modulus too) divided by ``links`` (each > 0); drives and tool
+    unchanged. A bracket of the world's idealizations, not a setting: the result at a factor says how soft the
+    structure must be for a verdict to change."""
+    if not (bearings > 0 and links > 0 and math.isfinite(bearings) and math.isfinite(links)):
+        raise ValueError(f"with_softer_structure(bearings={bearings}, links={links}); expected finite factors > 0")
+    soft = tuple(dataclasses.replace(b, radial_N_per_m=b.radial_N_per_m / bearings, axial_N_per_m=b.axial_N_per_m / bearings,
+                                     tilt_Nm_per_rad=b.tilt_Nm_per_rad / bearings) for b in world.bearings)
+    tubes = tuple(dataclasses.replace(t, E_Pa=t.E_Pa / links) for t in world.links)
+    return dataclasses.replace(world, bearings=soft, links=tubes)
