@@ -15,7 +15,8 @@ import pytest
 
 import femcheck
 from femcheck.cli import main
-from femcheck.vjm.bearing_world import CHA_MODULES, COBOT7_FLANGE_M, COBOT7_SIZES, ISO76_ROLLER_FACTOR, cobot7_bearings_world
+from femcheck.vjm.bearing_world import (CHA_MODULES, COBOT7_FLANGE_M, COBOT7_SIZES, ISO76_ROLLER_FACTOR,
+                                        cobot7_bearings_world, with_nominal_drives, with_softer_structure)
 from femcheck.vjm.beam_world import tcp_deflections
 from femcheck.vjm.world_identification import identify_on_world
 
@@ -130,7 +131,10 @@ def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and
     "and bearings the conventional model has 9.05 %, the extended one 9.68 %. A secant stiffness that changes "
     "from pose to pose and wrench to wrench (0.54-0.92 K3) is held by neither model's constant springs, and the "
     "extended model's tilts absorb it on the identification poses without carrying it to the verification "
-    "poses. Nothing was tuned; the cited data give this."))
+    "poses. Nothing was tuned; the cited data give this. The halving would need output bearings 37 times softer "
+    "than the line-contact estimate (size 32: tilt <= 160 N m/arcmin) or link tubes 4.9 times softer "
+    "(test_halving_needs_a_structure_far_softer_than_the_world_s); the seed's linear reading, constant K3 "
+    "drives, gives 4.82 % against 0.18 % and fails the other side (test_nominal_drives_...)."))
 def test_extended_model_halves_the_conventional_error_on_the_bearings_world(study):
     """Two-sided target, upper side: extended <= 0.5 x conventional (mean over the 26 Table I tests, and over
     the verification tests 9-13)."""
@@ -171,6 +175,10 @@ def test_identify_world_bearings_json(capsys):
             assert set(m[key]) == {"mean", "max"} and m[key]["max"] >= m[key]["mean"] > 0
         assert 0 < m["torsion_share"]["mean"] <= 100
     assert res["world_torsion_share"]["mean"] == pytest.approx(88.7, abs=0.05)   # as printed, 1 decimal
+    # the two-sided target as the JSON states it: ratio 0.954 as printed (3 decimals), halving not met, floor met
+    t = res["target"]
+    assert t["extended_over_conventional"] == pytest.approx(0.954, abs=5e-4)
+    assert t["extended_le_half_conventional"] is False and t["extended_ge_0_5_pct"] is True
 
 
 def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
@@ -187,3 +195,50 @@ def test_bearings_world_data_through_the_csv_path_gives_the_same_fit(tmp_path, c
     assert main(["identify", "cases/cobot7.toml", str(path), "--model", "extended", "--json", "-"]) == 0
     res = json.loads(capsys.readouterr().out.split("\n", 1)[1])
     np.testing.assert_allclose(res["compliances"], study.fits["extended"].compliance, rtol=1e-9)
+
+
+def _ratio_and_errors(case, world):
+    """(extended / conventional, conventional %, extended %): means over the 26 Table I tests."""
+    st = identify_on_world(case, world)
+    c, e = (st.summary(st.fits[k])["table1_all"]["mean"] for k in ("conventional", "extended"))
+    return e / c, c, e
+
+
+def test_softer_structure_divides_the_bearing_springs_and_the_link_moduli_only(case):
+    """with_softer_structure(w, b, l): radial, axial and tilt / b, tube E (and G) / l; drives, places, masses,
+    tool untouched (exact: one division each)."""
+    w = cobot7_bearings_world(case)
+    s = with_softer_structure(w, bearings=4.0, links=2.0)
+    for b0, b1 in zip(w.bearings, s.bearings):
+        assert (b1.radial_N_per_m, b1.axial_N_per_m, b1.tilt_Nm_per_rad) == (
+            b0.radial_N_per_m / 4.0, b0.axial_N_per_m / 4.0, b0.tilt_Nm_per_rad / 4.0)
+        assert (b1.torsion_Nm_per_rad, b1.torsion_curve, b1.offset_m, b1.mass_kg) == (
+            b0.torsion_Nm_per_rad, b0.torsion_curve, b0.offset_m, b0.mass_kg)
+    assert [t.E_Pa for t in s.links] == [t.E_Pa / 2.0 for t in w.links] and s.tool == w.tool
+    assert s.links[0].G_Pa == pytest.approx(w.links[0].G_Pa / 2.0, rel=1e-15)
+    with pytest.raises(ValueError, match="with_softer_structure"):
+        with_softer_structure(w, bearings=0.0)
+
+
+def test_nominal_drives_leave_the_world_almost_the_extended_model(case):
+    """The seed's FE reading (drives and bearings at "nominal value", sec. IV-A: a linear model): constant K3
+    drives. Then the joints' compliance is what the extended model is built of, and it fits the world to
+    0.18 % mean (conventional 4.82 %): the floor side of the target fails. Bounds: < 0.5 % (the target's floor)
+    and conventional 4.82 +- 0.05 % (as measured, 2 decimals)."""
+    w = with_nominal_drives(cobot7_bearings_world(case))
+    assert all(b.torsion_curve is None for b in w.bearings)
+    r, c, e = _ratio_and_errors(case, w)
+    assert e < 0.5 and c == pytest.approx(4.82, abs=0.05)
+
+
+@pytest.mark.parametrize("kind, factors", [
+    ("bearings", (30.0, 45.0)),
+    pytest.param("links", (4.0, 6.0), marks=pytest.mark.slow)])
+def test_halving_needs_a_structure_far_softer_than_the_world_s(case, kind, factors):
+    """How far the halving's failure depends on the world's idealizations (the line-contact bearings, stiffer
+    than mounted ones; femcheck's tubes): the ratio crosses 0.5 only with bearings between 30 and 45 times
+    softer (0.561, 0.448; crossing at 37.3) or tubes between 4 and 6 times softer (0.568, 0.430; at 4.86).
+    The bracket fails if the crossing moves out of it (either side)."""
+    w = cobot7_bearings_world(case)
+    lo, hi = (_ratio_and_errors(case, with_softer_structure(w, **{kind: f}))[0] for f in factors)
+    assert lo > 0.5 > hi
