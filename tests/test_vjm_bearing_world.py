@@ -132,7 +132,7 @@ def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and
     "from pose to pose and wrench to wrench (0.54-0.92 K3) is held by neither model's constant springs, and the "
     "extended model's tilts absorb it on the identification poses without carrying it to the verification "
     "poses. Nothing was tuned; the cited data give this. The halving would need output bearings 37 times softer "
-    "than the line-contact estimate (size 32: tilt <= 160 N m/arcmin) or link tubes 4.9 times softer "
+    "than the line-contact estimate (size 32: tilt <= 159 N m/arcmin) or link tubes 4.9 times softer "
     "(test_halving_needs_a_structure_far_softer_than_the_world_s); the seed's linear reading, constant K3 "
     "drives, gives 4.82 % against 0.18 % and fails the other side (test_nominal_drives_...)."))
 def test_extended_model_halves_the_conventional_error_on_the_bearings_world(study):
