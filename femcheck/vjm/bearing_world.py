@@ -58,11 +58,14 @@ How seed 002's protocol is read (sec. IV-A), choice by choice:
   (constant K3, the stiffness the actuator tables list alone) as a variant.
 * **Bearings.** The ISO 76 / line-contact estimate above. The catalogue's own tilting-moment stiffness of the
   output bearing (table 55.1, K_B) would replace it, with the axial springs on the pitch circle set to give it;
-  that value is not in femcheck's data, so it is not used. The estimate is stiffer than a mounted bearing; how far the result depends
-  on it is bracketed with :func:`with_softer_structure` (the halving needs bearings about 37 times softer).
+  that value is not in femcheck's data, so it is not used. The estimate is stiffer than a mounted bearing; how
+  far the result depends on it is bracketed with :func:`with_softer_structure` (the halving of the conventional
+  error needs bearings about 37 times softer).
 * **Links and housings.** The beam world's tubes (:func:`cobot7_world`), femcheck's choice, bracketed the same way
-  (the halving needs tubes about 4.9 times softer). The idealizations (rigid bearing rings, load-independent
-line contact, no clearance or preload dependence) make the bearings stiffer than a mounted catalogue bearing.
+  (the halving needs tubes about 4.9 times softer).
+
+The idealizations (rigid bearing rings, load-independent line contact, no clearance or preload dependence) make
+the bearings stiffer than a mounted catalogue bearing.
 The drives' hysteresis loss and lost motion (listed beside the stiffness, up to 1 arcmin each) are left out:
 the law is the catalogue's one curve for loading in both directions.
 """
