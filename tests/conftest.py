@@ -80,3 +80,18 @@ def sparse_actuation_readings():
     data = dc.replace(data, **{f: getattr(data, f)[keep] for f in
                                ("point", "direction", "trial", "phase", "load_N", "force", "disp", "row")})
     return model, process(data, case)
+
+
+def clamped_steel_bar(n_along: int, n_across: int, order: int):
+    """(basis, K, constraints) of a 100 x 20 x 20 mm steel bar (E = 210 GPa, nu = 0.3) clamped at x = 0: a tensor
+    tetrahedral mesh with ``n_along`` x ``n_across`` x ``n_across`` nodes and Lagrange elements of ``order``. The
+    linear-solver tests' symmetric positive definite system once reduced."""
+    import numpy as np
+    import skfem
+
+    from femcheck.fe import constraints
+    from femcheck.fe.elasticity import assemble_stiffness, vector_basis
+    across = np.linspace(0, 0.02, n_across)
+    basis = vector_basis(skfem.MeshTet.init_tensor(np.linspace(0, 0.1, n_along), across, across), order)
+    K = assemble_stiffness(basis, 210e9, 0.3)
+    return basis, K, constraints.clamp(basis.N, basis.get_dofs(lambda x: np.isclose(x[0], 0.0)).all())

@@ -3,8 +3,6 @@ residual per (point, direction) against the pure error of the same subspace."""
 import numpy as np
 import pytest
 
-import femcheck
-from femcheck.diagnose import AnalyticalChainModel
 from femcheck.diagnose.effects import get_effect
 from femcheck.diagnose.fitting import fit_effects
 from femcheck.diagnose.lack_of_fit import discrepancy_basis, structured_lack_of_fit
@@ -16,13 +14,8 @@ FAST = ("+x", "+y", "+z")
 
 
 @pytest.fixture(scope="module")
-def case():
-    return femcheck.load_case("cases/haptic_6psu.toml")
-
-
-@pytest.fixture(scope="module")
-def model(case):
-    return AnalyticalChainModel(case, "detailed", "rigid")
+def model(rigid_chain):
+    return rigid_chain
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ import math
 import numpy as np
 import pytest
 
-import femcheck
 from femcheck.chain import ChainAdjustments, evaluate
 from femcheck.diagnose import AnalyticalChainModel, diagnose
 from femcheck.diagnose.effects import LOCATED, get_effect
@@ -23,13 +22,8 @@ FAST_DIRECTIONS = ("+x", "+y", "+z")
 
 
 @pytest.fixture(scope="module")
-def case():
-    return femcheck.load_case("cases/haptic_6psu.toml")
-
-
-@pytest.fixture(scope="module")
-def model(case):
-    return AnalyticalChainModel(case, "detailed", "rigid")
+def model(rigid_chain):
+    return rigid_chain
 
 
 def test_located_effect_scales_only_its_legs(case, model):

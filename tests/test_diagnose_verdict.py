@@ -6,8 +6,7 @@ softening, dial shear): the diagnosis must say ``unexplained``. In-vocabulary da
 import numpy as np
 import pytest
 
-import femcheck
-from femcheck.diagnose import AnalyticalChainModel, diagnose
+from femcheck.diagnose import diagnose
 from femcheck.experiment.foreign import FOREIGN, simulate_foreign
 from femcheck.experiment.simulate import simulate
 from femcheck.measured import process
@@ -18,13 +17,8 @@ FEW = ("actuation_compliance", "link_modulus", "leg_softening", "sensor_misalign
 
 
 @pytest.fixture(scope="module")
-def case():
-    return femcheck.load_case("cases/haptic_6psu.toml")
-
-
-@pytest.fixture(scope="module")
-def model(case):
-    return AnalyticalChainModel(case, "detailed", "rigid")
+def model(rigid_chain):
+    return rigid_chain
 
 
 def _json(model, r, candidates=FEW):

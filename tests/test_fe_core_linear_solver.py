@@ -2,19 +2,15 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
-import skfem
 
-from femcheck.fe import constraints
-from femcheck.fe.elasticity import assemble_stiffness, rigid_body_modes, vector_basis
+from conftest import clamped_steel_bar
+from femcheck.fe.elasticity import rigid_body_modes
 from femcheck.fe.linear_solver import choose_method, cvxopt_available, factorize, pardiso_available, solve
 
 
 @pytest.fixture(scope="module")
 def system():
-    mesh = skfem.MeshTet.init_tensor(np.linspace(0, 0.1, 9), np.linspace(0, 0.02, 3), np.linspace(0, 0.02, 3))
-    basis = vector_basis(mesh, 2)
-    K = assemble_stiffness(basis, 210e9, 0.3)
-    c = constraints.clamp(basis.N, basis.get_dofs(lambda x: np.isclose(x[0], 0.0)).all())
+    basis, K, c = clamped_steel_bar(9, 3, 2)
     rng = np.random.default_rng(0)
     f = rng.standard_normal(basis.N)
     return c.reduce_matrix(K), c.reduce_vector(f), rigid_body_modes(basis)[c.free]

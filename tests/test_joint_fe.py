@@ -104,6 +104,19 @@ def test_cli_rejects_bad_joint(tmp_path):
     assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", "elbow"]) == 2
 
 
+def _check_joint_coarse(tmp_path, joint):
+    """The one row of ``femcheck check-joints --joint <joint> --mesh coarse --json`` on the reference case, which
+    must exit 0 and carry the contract keys."""
+    from femcheck.cli import main
+    out = tmp_path / f"{joint}.json"
+    assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", joint, "--mesh", "coarse",
+                 "--json", str(out)]) == 0
+    (r,) = json.loads(out.read_text())
+    for key in ("converged", "dofs", "iterations", "seconds", "fe_compliance", "analytical_compliance", "error_pct"):
+        assert key in r
+    return r
+
+
 @pytest.mark.slow
 def test_spherical_joint_contact_fe_coarse(case, tmp_path):
     """Condensed ball-in-seat contact FE: converges, and its eq. 1 axial secant is Hertz within 25 %.
@@ -111,13 +124,7 @@ def test_spherical_joint_contact_fe_coarse(case, tmp_path):
     The FE contains the seat's bulk compression and the ball between contact and cap besides the Hertz
     approach of two half-spaces (softer), and the coarse mesh resolves the patch with few points; 25 %
     bounds both (measured −7 % at coarse, docs/verify.md)."""
-    from femcheck.cli import main
-    out = tmp_path / "j.json"
-    assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", "spherical", "--mesh", "coarse",
-                 "--json", str(out)]) == 0
-    (r,) = json.loads(out.read_text())
-    for key in ("converged", "dofs", "iterations", "seconds", "fe_compliance", "analytical_compliance", "error_pct"):
-        assert key in r
+    r = _check_joint_coarse(tmp_path, "spherical")
     assert r["converged"] and r["dofs"] > 10_000 and r["iterations"] > 0
     assert np.shape(r["fe_compliance"]) == (6, 6) and np.shape(r["analytical_compliance"]) == (6, 6)
     assert abs(r["error_pct"]["u_z"]) < 25.0
@@ -196,13 +203,7 @@ def test_universal_joint_contact_fe_converges_coarse(case, tmp_path):
     """The cross floating in its 2c clearance seats and converges (it chattered before); the
     6 x 6 tangent is symmetric and positive definite; the JSON carries the contract keys. Slow since the
     graded coarse level (238 k DOFs: about 40 s of CPU, 2–3 min wall on the loaded machine)."""
-    from femcheck.cli import main
-    out = tmp_path / "u.json"
-    assert main(["check-joints", "cases/haptic_6psu.toml", "--joint", "universal", "--mesh", "coarse",
-                 "--json", str(out)]) == 0
-    (r,) = json.loads(out.read_text())
-    for key in ("converged", "dofs", "iterations", "seconds", "fe_compliance", "analytical_compliance", "error_pct"):
-        assert key in r
+    r = _check_joint_coarse(tmp_path, "universal")
     assert r["converged"] and r["iterations"] > 0 and r["factorizations"] > 0
     assert r["stabilization_force_share"] < 1e-6 and r["residual_rel"] < 1e-8
     K = np.array(r["fe_tangent_stiffness"], float)

@@ -6,11 +6,10 @@ import logging
 import numpy as np
 import pytest
 import scipy.sparse as sp
-import skfem
 
+from conftest import clamped_steel_bar
 from femcheck.errors import FemcheckError
-from femcheck.fe import constraints, linear_solver as ls
-from femcheck.fe.elasticity import assemble_stiffness, vector_basis
+from femcheck.fe import linear_solver as ls
 
 needs_cvxopt = pytest.mark.skipif(not ls.cvxopt_available(), reason="cvxopt (CHOLMOD/UMFPACK) not installed")
 
@@ -25,10 +24,7 @@ def _reset(monkeypatch):
 
 @pytest.fixture(scope="module")
 def elastic():
-    mesh = skfem.MeshTet.init_tensor(np.linspace(0, 0.1, 11), np.linspace(0, 0.02, 4), np.linspace(0, 0.02, 4))
-    basis = vector_basis(mesh, 1)
-    K = assemble_stiffness(basis, 210e9, 0.3)
-    c = constraints.clamp(basis.N, basis.get_dofs(lambda x: np.isclose(x[0], 0.0)).all())
+    basis, K, c = clamped_steel_bar(11, 4, 1)
     return c.reduce_matrix(K), np.random.default_rng(3).standard_normal(c.free.size)
 
 

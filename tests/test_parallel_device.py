@@ -211,35 +211,32 @@ def _edited(path, old, new, count=1):
     return text.replace(old, new, count)
 
 
-def test_error_names_the_leg_with_two_actuated_joints(tmp_path):
-    bad = _edited(HEXAPOD, 'type = "U"\n  point_m = [0.115911, 0.031058', 'type = "R"\n  actuated = true\n  axes = [[0.0, 0.0, 1.0]]\n'
-                  '  drive = { law = "torsional", stiffness = 100.0 }\n  point_m = [0.115911, 0.031058')
-    with pytest.raises(CaseError, match=r"legs\[1\]\.joints: leg 1 \('b'\) has 2 actuated joints"):
-        load_case(_write(tmp_path, bad))
-
-
-def test_error_names_the_leg_that_cannot_reach_the_cube(tmp_path):
-    bad = _edited(DELTA, "cube_edge_m = 0.04", "cube_edge_m = 0.6")
-    with pytest.raises(CaseError, match=r"legs\[0\]: leg 0 \('leg1'\) cannot reach test point P1"):
-        load_case(_write(tmp_path, bad))
-
-
-def test_error_names_the_joint_key(tmp_path):
-    bad = _edited(HEXAPOD, 'type = "P"\n  actuated = true', 'type = "P"\n  point_m = [0.0, 0.0, 0.1]\n  actuated = true')
-    with pytest.raises(CaseError, match=r"legs\[0\]\.joints\[1\]\.point_m: a P joint has no centre"):
-        load_case(_write(tmp_path, bad))
-
-
-def test_error_names_wrong_link_count(tmp_path):
-    bad = _edited(DELTA, '  [[legs.links]]\n  name = "rod"', '  [[legs.links]]\n  name = "extra"\n  element = "rigid"\n\n  [[legs.links]]\n  name = "rod"')
-    with pytest.raises(CaseError, match=r"legs\[0\]\.links: leg 0 \('leg'\) has 3 links; expected 2"):
-        load_case(_write(tmp_path, bad))
-
-
-def test_error_names_a_free_platform_motion(tmp_path):
+#: (case file, text replaced, its replacement, the error the edited case must raise)
+REFUSED_EDITS = {
+    "names_the_leg_with_two_actuated_joints": (
+        HEXAPOD, 'type = "U"\n  point_m = [0.115911, 0.031058', 'type = "R"\n  actuated = true\n  axes = [[0.0, 0.0, 1.0]]\n'
+        '  drive = { law = "torsional", stiffness = 100.0 }\n  point_m = [0.115911, 0.031058',
+        r"legs\[1\]\.joints: leg 1 \('b'\) has 2 actuated joints"),
+    "names_the_leg_that_cannot_reach_the_cube": (
+        DELTA, "cube_edge_m = 0.04", "cube_edge_m = 0.6", r"legs\[0\]: leg 0 \('leg1'\) cannot reach test point P1"),
+    "names_the_joint_key": (
+        HEXAPOD, 'type = "P"\n  actuated = true', 'type = "P"\n  point_m = [0.0, 0.0, 0.1]\n  actuated = true',
+        r"legs\[0\]\.joints\[1\]\.point_m: a P joint has no centre"),
+    "names_wrong_link_count": (
+        DELTA, '  [[legs.links]]\n  name = "rod"', '  [[legs.links]]\n  name = "extra"\n  element = "rigid"\n\n  [[legs.links]]\n  name = "rod"',
+        r"legs\[0\]\.links: leg 0 \('leg'\) has 3 links; expected 2"),
     # platform U's outer axis no longer parallel to the crank axis: no leg carries a couple, the platform turns
-    bad = _edited(DELTA, "axes = [[0.661438, 0.0, -0.75], [0.0, 1.0, 0.0]]", "axes = [[0.661438, 0.0, -0.75], [0.75, 0.0, 0.661438]]")
-    with pytest.raises(CaseError, match="free to move"):
+    "names_a_free_platform_motion": (
+        DELTA, "axes = [[0.661438, 0.0, -0.75], [0.0, 1.0, 0.0]]", "axes = [[0.661438, 0.0, -0.75], [0.75, 0.0, 0.661438]]",
+        "free to move"),
+}
+
+
+@pytest.mark.parametrize("edit", REFUSED_EDITS)
+def test_error(edit, tmp_path):
+    path, old, new, message = REFUSED_EDITS[edit]
+    bad = _edited(path, old, new)
+    with pytest.raises(CaseError, match=message):
         load_case(_write(tmp_path, bad))
 
 

@@ -93,22 +93,28 @@ def test_file_is_inlined_so_variants_keep_the_law(tmp_path):
     np.testing.assert_array_equal(v.device.legs[0].measured_law[0][0], law.device.legs[0].measured_law[0][0])
 
 
+def _backend_pairs(case, n_poses, pose_seed, rng):
+    """(numpy result, compiled result, (joints, scaled)) at ``n_poses`` random poses under WRENCH, both joint
+    idealizations, without and with random element scales in [0.5, 2] drawn from ``rng``."""
+    dev = case.device
+    P = _random_poses(case, n_poses, pose_seed)
+    scale = rng.uniform(0.5, 2.0, (dev.n_legs, len(dev.element_names)))
+    for joints in ("released", "rigid"):
+        for es in (None, scale):
+            yield (evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="numpy"),
+                   evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="compiled"),
+                   (joints, es is not None))
+
+
 @pytest.fixture(scope="module")
 def measured():
     return load_case(MEASURED)
 
 
 def test_numpy_and_compiled_agree_on_the_fe_law(measured):
-    dev = measured.device
-    P = _random_poses(measured, 12, 5)
-    rng = np.random.default_rng(7)
-    scale = rng.uniform(0.5, 2.0, (dev.n_legs, len(dev.element_names)))
-    for joints in ("released", "rigid"):
-        for es in (None, scale):
-            a = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="numpy")
-            b = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="compiled")
-            for name in ("K", "S", "twist", "leg_wrench", "element_energy"):
-                assert _rel(getattr(b, name), getattr(a, name)) < RTOL, (joints, name)
+    for a, b, label in _backend_pairs(measured, 12, 5, np.random.default_rng(7)):
+        for name in ("K", "S", "twist", "leg_wrench", "element_energy"):
+            assert _rel(getattr(b, name), getattr(a, name)) < RTOL, label + (name,)
 
 
 def test_beam_fe_reproduces_the_chain_model_with_the_fe_law(measured):
@@ -286,18 +292,12 @@ def test_ladder_numpy_and_compiled_agree():
     hexa = build_case(raw, HEXAPOD)
     rng = np.random.default_rng(17)
     for case in (psu, hexa):
-        dev = case.device
-        P = _random_poses(case, 8, 19)
-        scale = rng.uniform(0.5, 2.0, (dev.n_legs, len(dev.element_names)))
-        for joints in ("released", "rigid"):
-            for es in (None, scale):
-                a = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="numpy")
-                b = evaluate(dev, P, WRENCH, joints=joints, element_scale=es, backend="compiled")
-                for name in ("K", "S", "twist", "leg_wrench", "element_energy"):
-                    assert _rel(getattr(b, name), getattr(a, name)) < RTOL, (case.meta.name, joints, name)
-                assert a.hertz_stiffness.keys() == b.hertz_stiffness.keys()
-                for key in a.hertz_stiffness:
-                    np.testing.assert_allclose(b.hertz_stiffness[key], a.hertz_stiffness[key], rtol=RTOL)
+        for a, b, label in _backend_pairs(case, 8, 19, rng):
+            for name in ("K", "S", "twist", "leg_wrench", "element_energy"):
+                assert _rel(getattr(b, name), getattr(a, name)) < RTOL, (case.meta.name,) + label + (name,)
+            assert a.hertz_stiffness.keys() == b.hertz_stiffness.keys()
+            for key in a.hertz_stiffness:
+                np.testing.assert_allclose(b.hertz_stiffness[key], a.hertz_stiffness[key], rtol=RTOL)
 
 
 def test_bad_ladder(tmp_path):

@@ -35,6 +35,13 @@ def machine() -> dict:
             "load_average": round(os.getloadavg()[0], 2)}
 
 
+def print_figures(figures: dict, table) -> None:
+    """An area module run as a script (``python -m femcheck.bench.solvers``): its own ``table(figures)`` and the
+    figures as JSON on stdout; nothing is written."""
+    print(table(figures))
+    json.dump(figures, sys.stdout, indent=1)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     snapshot = "--snapshot" in argv

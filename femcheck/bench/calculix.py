@@ -101,12 +101,7 @@ def hertz_deck(level: str = LEVEL, loads=None, penalty_factor: float | None = No
     outer = np.isclose(X[:, 0], L, atol=tol) | np.isclose(X[:, 1], L, atol=tol) | (np.abs(X[:, 2] + overlap * body) > L - tol)
     sym_x, sym_y = np.isclose(X[:, 0], 0.0, atol=tol), np.isclose(X[:, 1], 0.0, atol=tol)
     # contact surfaces (as hertz_sphere.build): slave = the upper body's curved bottom, master = the block's top
-    bf = mesh.boundary_facets()
-    fc = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
-    upper_f = mesh.f2t[0, bf] >= n_lower
-    interior = (fc[0] < L - tol) & (fc[1] < L - tol) & (fc[0] > tol) & (fc[1] > tol)
-    slave = bf[upper_f & interior & (fc[2] < L - tol)]
-    master = bf[~upper_f & interior & np.isclose(fc[2], 0.0, atol=tol)]
+    slave, master = hs.contact_facets(mesh, n_lower, tol)
     s_el, s_face = cx.facet_faces(mesh, m10, slave)
     m_el, m_face = cx.facet_faces(mesh, m10, master)
     face_nodes = []
@@ -435,8 +430,5 @@ def table(figures: dict) -> str:
 
 
 if __name__ == "__main__":
-    import json
-    import sys
-    figs = run()
-    print(table(figs))
-    json.dump(figs, sys.stdout, indent=1)
+    from femcheck.bench.__main__ import print_figures
+    print_figures(run(), table)

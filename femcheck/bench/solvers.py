@@ -117,8 +117,5 @@ def table(figures: dict) -> str:
 
 
 if __name__ == "__main__":
-    import json
-    import sys
-    figs = run()
-    print(table(figs))
-    json.dump(figs, sys.stdout, indent=1)
+    from femcheck.bench.__main__ import print_figures
+    print_figures(run(), table)

@@ -15,7 +15,6 @@ configuration's own rows (3 per wrench), which is an assumed reading of seed 002
 """
 from __future__ import annotations
 
-import csv
 from enum import Enum
 
 import numpy as np
@@ -23,6 +22,7 @@ import typer
 
 from femcheck.cli._common import emit_json, load_case_for
 from femcheck.errors import FemcheckError
+from femcheck.measured.csv_format import read_table_rows
 from femcheck.report.atomic import write_text_atomic
 from femcheck.vjm.extended_vjm import identification_matrix, identify_compliances, virtual_jacobian
 
@@ -39,13 +39,7 @@ class VJMModel(str, Enum):
 def read_data(path: str, n: int):
     """(set (m,), q (m, n) rad, W (m, 6), dX (m, 3) m) from DATA.csv; errors name the file and row."""
     cols = ["set"] + [f"q{j + 1}" for j in range(n)] + ["fx", "fy", "fz", "mx", "my", "mz", "dx", "dy", "dz"]
-    try:
-        with open(path, newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as e:
-        raise IdentifyDataError(f"{path}: cannot read ({e.strerror})") from None
-    if not rows or any(c not in rows[0] for c in cols):
-        raise IdentifyDataError(f"{path}: expected header columns {','.join(cols)}")
+    rows = read_table_rows(path, cols, IdentifyDataError)
     try:
         num = np.array([[float(r[c]) for c in cols[1:]] for r in rows])
     except ValueError as e:

@@ -6,9 +6,7 @@ from enum import Enum
 
 import typer
 
-from femcheck.cli._common import load_case_for
-
-from femcheck.cli._common import Joints
+from femcheck.cli._common import Joints, ModelLevel, load_case_for
 
 
 class Design(str, Enum):
@@ -21,12 +19,6 @@ class SweepModel(str, Enum):
     simplified = "simplified"
     detailed = "detailed"
     fe = "fe"
-
-
-class FELevel(str, Enum):
-    """FE level of ``--model fe``: load protocol and joint model of the device FE (docs/verify.md)."""
-    simplified = "simplified"
-    detailed = "detailed"
 
 
 class MeshLevel(str, Enum):
@@ -44,7 +36,7 @@ def register(app: typer.Typer) -> None:
         design: Design = typer.Option(Design.lhs, "--design", help="grid (levels N per key), lhs, or sobol (Saltelli, gives Sobol' indices)"),
         samples: int = typer.Option(None, "--samples", help="lhs: samples; sobol: base samples n (power of 2; n (d+2) runs); grid: default levels"),
         model: SweepModel = typer.Option(SweepModel.detailed, "--model", help="simplified | detailed | fe (whole-device FE, one sample per task)"),
-        fe_level: FELevel = typer.Option(None, "--fe-level", help="--model fe only: FE level simplified | detailed (default detailed)"),
+        fe_level: ModelLevel = typer.Option(None, "--fe-level", help="--model fe only: FE level simplified | detailed (default detailed)"),
         mesh: MeshLevel = typer.Option(None, "--mesh", help="--model fe only: mesh level coarse | default | fine (default coarse)"),
         joints: Joints = typer.Option(None, "--joints", help="joint idealization; default: the case's model.joint_rotations"),
         points: str = typer.Option("cube", "--points", help="cube (P0..P8) or a list such as P0,P3"),
@@ -75,7 +67,7 @@ def register(app: typer.Typer) -> None:
         if model != SweepModel.fe and (fe_level is not None or mesh is not None):
             raise typer.BadParameter(f"{'--fe-level' if fe_level is not None else '--mesh'} applies to --model fe only "
                                      f"(got --model {model.value})")
-        fe_level_value = (fe_level or FELevel.detailed).value
+        fe_level_value = (fe_level or ModelLevel.detailed).value
         mesh_value = (mesh or MeshLevel.coarse).value
         case = load_case_for(case_path, "sweep", kinds=("haptic_6psu", "parallel_device"))
         if case.kind == "parallel_device" and model == SweepModel.fe:

@@ -73,19 +73,25 @@ class BeamSection:
         return cls(A=math.pi * (do**2 - di**2) / 4.0, Ix=I, Iy=I, J=2.0 * I, kappa_x=k, kappa_y=k)
 
 
+def element_axes(nodes, elements, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(unit axis vectors node 1 -> node 2 (ne, 3), lengths (ne,) m) of the two-node line elements ``elements``
+    (ne, 2) between ``nodes`` (n, 3) m; a zero-length element is refused, naming ``what`` and its indices."""
+    nodes = np.asarray(nodes, dtype=float)
+    elements = np.asarray(elements, dtype=np.int64).reshape(-1, 2)
+    d = nodes[elements[:, 1]] - nodes[elements[:, 0]]
+    L = np.linalg.norm(d, axis=1)
+    if np.any(L <= 0):
+        raise ValueError(f"{what} of zero length: element(s) {np.flatnonzero(L <= 0)[:10].tolist()}")
+    return d / L[:, None], L
+
+
 def local_frames(nodes, elements, orientation=None):
     """Rotation matrices R (ne, 3, 3) (rows = local x, y, z in global coordinates) and lengths L (ne,) m.
 
     nodes (n, 3) m; elements (ne, 2) int; orientation (3,) or (ne, 3): a vector whose component normal to
     the axis becomes local x.
     """
-    nodes = np.asarray(nodes, dtype=float)
-    elements = np.asarray(elements, dtype=np.int64).reshape(-1, 2)
-    d = nodes[elements[:, 1]] - nodes[elements[:, 0]]
-    L = np.linalg.norm(d, axis=1)
-    if np.any(L <= 0):
-        raise ValueError(f"zero-length beam element(s): {np.flatnonzero(L <= 0)[:10].tolist()}")
-    ez = d / L[:, None]
+    ez, L = element_axes(nodes, elements, "beam element")
     if orientation is None:
         ref = np.tile([1.0, 0.0, 0.0], (len(L), 1))
         par = np.abs(ez[:, 0]) > 1.0 - 1e-6

@@ -23,16 +23,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from femcheck.fe.beam import element_axes
+
 
 def strand_geometry(nodes, elements):
     """(unit vectors (ne, 3), lengths (ne,) m) of the strands ``elements`` (ne, 2) between ``nodes`` (n, 3) m."""
-    nodes = np.asarray(nodes, dtype=float)
-    elements = np.asarray(elements, dtype=np.int64).reshape(-1, 2)
-    d = nodes[elements[:, 1]] - nodes[elements[:, 0]]
-    L = np.linalg.norm(d, axis=1)
-    if np.any(L <= 0):
-        raise ValueError(f"cable strand of zero length: elements {elements[L <= 0].tolist()}")
-    return d / L[:, None], L
+    return element_axes(nodes, elements, "cable strand")
 
 
 def cable_stiffness(e, L, EA, tension) -> np.ndarray:

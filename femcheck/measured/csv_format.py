@@ -184,6 +184,20 @@ def read_data_text(path) -> str:
         raise MeasuredDataError(path, None, None, "is a directory; expected a CSV file") from None
 
 
+def read_table_rows(path, columns, error: type[Exception]) -> list[dict]:
+    """The rows (one dict per line, keyed by the header) of the CSV table at ``path``, whose header must hold every
+    name of ``columns``: for the tables read by the identification commands (``DATA.csv``, the HISS readings). An
+    unreadable file or a missing column raises ``error`` with one line naming the file and what was expected."""
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except OSError as e:
+        raise error(f"{path}: cannot read ({e.strerror})") from None
+    if not rows or any(c not in rows[0] for c in columns):
+        raise error(f"{path}: expected header columns {','.join(columns)}")
+    return rows
+
+
 def read_measured_csv(path) -> MeasuredData:
     """Read and validate a measured-data CSV file (opened read-only; never modified)."""
     return parse_measured_csv(read_data_text(path), str(path))

@@ -10,7 +10,7 @@ import numpy as np
 from femcheck.parallel.chain_model import evaluate
 from femcheck.parallel.device import test_points
 from femcheck.parallel.leg_kinematics import solve_legs
-from femcheck.report.stiffness_map import StiffnessMap
+from femcheck.report.stiffness_map import StiffnessMap, slice_poses
 
 
 def stiffness_map(case, direction: str = "x", z_offset: float = 0.025, model: str = "detailed",
@@ -19,20 +19,15 @@ def stiffness_map(case, direction: str = "x", z_offset: float = 0.025, model: st
     ``z_offset`` (m) above it, linearized at the case's test force along ``direction``."""
     axis = "xyz".index(direction)
     joints = joints or case.model.joint_rotations
-    centre = np.asarray(case.workspace.nominal_tcp_m, dtype=float)
-    x = centre[0] + np.linspace(-half_width, half_width, n)
-    y = centre[1] + np.linspace(-half_width, half_width, n)
-    X, Y = np.meshgrid(x, y)
-    rot = test_points(case)[0, 3:]
-    poses = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, centre[2] + z_offset), np.tile(rot, (X.size, 1))])
+    x, y, z, poses = slice_poses(case, test_points(case)[0, 3:], z_offset, half_width, n)
     dev = case.device
     state = solve_legs(dev, poses)
     ok = state.ok
-    k = np.full(X.size, np.nan)
+    k = np.full(len(poses), np.nan)
     if ok.any():
         W = np.zeros(6)
         W[axis] = case.loads.test_N
         r = evaluate(dev, poses[ok], W, model=model, joints=joints)
         k[ok] = r.directional_stiffness(np.eye(3)[axis])
-    return StiffnessMap(x=x, y=y, z=centre[2] + z_offset, k=k.reshape(X.shape), direction=direction, model=model,
+    return StiffnessMap(x=x, y=y, z=z, k=k.reshape(len(y), len(x)), direction=direction, model=model,
                         joints=joints)

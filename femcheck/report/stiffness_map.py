@@ -28,6 +28,19 @@ class StiffnessMap:
     joints: str
 
 
+def slice_poses(case, rotation, z_offset: float, half_width: float, n: int):
+    """The map's grid: (x (n,), y (n,) m, z m, poses (n * n, 6) row-major over (y, x)) on an
+    n x n square of half-width ``half_width`` (m) centred on the case's nominal TCP, ``z_offset`` (m) above it,
+    all at the platform ``rotation`` (3,)."""
+    centre = np.asarray(case.workspace.nominal_tcp_m, dtype=float)
+    x = centre[0] + np.linspace(-half_width, half_width, n)
+    y = centre[1] + np.linspace(-half_width, half_width, n)
+    X, Y = np.meshgrid(x, y)
+    z = centre[2] + z_offset
+    poses = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, z), np.tile(rotation, (X.size, 1))])
+    return x, y, z, poses
+
+
 def stiffness_map(case, direction: str = "x", z_offset: float = 0.025, model: str = "detailed",
                   joints: str | None = None, half_width: float = 0.1, n: int = 81) -> StiffnessMap:
     """Directional stiffness on an n x n grid of half-width ``half_width`` (m) around the cube centre.
@@ -35,21 +48,16 @@ def stiffness_map(case, direction: str = "x", z_offset: float = 0.025, model: st
     The detailed model is linearized at the case's detailed test load along ``direction``.
     """
     axis = "xyz".index(direction)
-    centre = np.asarray(case.workspace.nominal_tcp_m, dtype=float)
-    x = centre[0] + np.linspace(-half_width, half_width, n)
-    y = centre[1] + np.linspace(-half_width, half_width, n)
-    X, Y = np.meshgrid(x, y)
-    rot = test_points(case)[0, 3:]
-    poses = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, centre[2] + z_offset), np.tile(rot, (X.size, 1))])
+    x, y, z, poses = slice_poses(case, test_points(case)[0, 3:], z_offset, half_width, n)
     ok = ~np.isnan(leg_geometry(case, poses, check_reach=False).slider).any(axis=1)
     W = np.zeros(6)
     W[axis] = case.loads.detailed_test_N if model == "detailed" else case.loads.simplified_test_N
-    k = np.full(X.size, np.nan)
+    k = np.full(len(poses), np.nan)
     if ok.any():
         r = evaluate(case, poses[ok], W, model=model, joints=joints)
         k[ok] = r.directional_stiffness(np.eye(3)[axis])
         joints = r.joints
-    return StiffnessMap(x=x, y=y, z=centre[2] + z_offset, k=k.reshape(X.shape), direction=direction, model=model,
+    return StiffnessMap(x=x, y=y, z=z, k=k.reshape(len(y), len(x)), direction=direction, model=model,
                         joints=joints or case.model.joint_rotations)
 
 

@@ -26,12 +26,12 @@ socket; the socket arm, 50 mm, is assumed: the paper gives none), noise added to
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 
 import numpy as np
 
 from femcheck.errors import FemcheckError
+from femcheck.measured.csv_format import read_table_rows
 
 SETUP_NAMES = ("D/F", "F/D")
 WRENCH_COLUMNS = ("fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm")
@@ -58,13 +58,7 @@ class HissData:
 
 def read_csv(path: str, case) -> HissData:
     names = [tp.name.upper() for tp in case.test_points]
-    try:
-        with open(path, newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as e:
-        raise HissDataError(f"{path}: cannot read ({e.strerror})") from None
-    if not rows or any(c not in rows[0] for c in COLUMNS):
-        raise HissDataError(f"{path}: expected header columns {','.join(COLUMNS)}")
+    rows = read_table_rows(path, COLUMNS, HissDataError)
     setup, point, num = [], [], []
     for i, r in enumerate(rows, start=2):
         if r["setup"] not in SETUP_NAMES:

@@ -125,6 +125,18 @@ def make_mesh(level: str, geometry: str = "half-space"):
     return join(lower, type(cube)(p, cube.t))
 
 
+def contact_facets(mesh, n_lower: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """(slave, master) boundary facet indices of the quarter model from :func:`make_mesh`: slave = the upper
+    body's bottom (curved for the sphere), master = the block's top face z = 0; facets on the symmetry planes
+    x = 0, y = 0 and on the outer faces at L (within ``tol``, m) are left out. The upper body's elements are
+    those from index ``n_lower`` on."""
+    bf = mesh.boundary_facets()
+    fc = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
+    upper_f = mesh.f2t[0, bf] >= n_lower
+    interior = (fc[0] < L - tol) & (fc[1] < L - tol) & (fc[0] > tol) & (fc[1] > tol)
+    return bf[upper_f & interior & (fc[2] < L - tol)], bf[~upper_f & interior & np.isclose(fc[2], 0.0, atol=tol)]
+
+
 def _far_field_constraints(basis, body, F, delta_dof, tol):
     """u = T q + g: symmetry planes, Boussinesq field on the truncation faces, Δ on the upper far field."""
     ndof = basis.N + 1
@@ -169,12 +181,7 @@ def build(level: str = "default", penalty_factor: float = 100.0, F_max: float = 
     C = _far_field_constraints(basis, body, F_max, delta_dof, tol)
     f = np.zeros(basis.N + 1)
     f[delta_dof] = -F_max / 4.0
-    bf = mesh.boundary_facets()
-    fc = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
-    upper_f = mesh.f2t[0, bf] >= n_lower
-    interior = (fc[0] < L - tol) & (fc[1] < L - tol) & (fc[0] > tol) & (fc[1] > tol)
-    slave = bf[upper_f & interior & (fc[2] < L - tol)]
-    master = bf[~upper_f & interior & np.isclose(fc[2], 0.0, atol=tol)]
+    slave, master = contact_facets(mesh, n_lower, tol)
     eps = default_penalty(mesh, slave, E, penalty_factor)
     pair = pair_surfaces(basis, slave, master, penalty_n=eps, friction=0.0, name="sphere-block", ndof=basis.N + 1,
                          intorder=intorder)
