@@ -26,7 +26,7 @@ from scipy.optimize import least_squares
 
 from femcheck.kinematics.directions import direction_unit
 from femcheck.parallel.chain_model import evaluate
-from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.kinematics.points import POINT_LABELS, point_index, test_poses
 from femcheck.parallel.leg_kinematics import solve_legs
 
 #: a factor outside [1/(1+t), 1+t] counts as an effect
@@ -48,12 +48,14 @@ class Readings:
 
 def readings_from(case, data) -> Readings:
     """Average the measured rows per (point, direction); total minus preload where both phases are given."""
-    P = test_points(case)
+    P = test_poses(case)
     keys = sorted({(p, d) for p, d in zip(data.point, data.direction)})
     labels, dirs, poses, force, disp = [], [], [], [], []
     for p, d in keys:
-        if p not in POINT_LABELS:
-            raise ValueError(f"{data.source}: point {p!r}; expected one of {', '.join(POINT_LABELS)}")
+        try:
+            row = point_index([p])[0]
+        except ValueError as exc:
+            raise ValueError(f"{data.source}: {exc}") from None
         sel = (data.point == p) & (data.direction == d)
         tot = sel & (data.phase == "total")
         if not tot.any():
@@ -62,7 +64,7 @@ def readings_from(case, data) -> Readings:
         pre = sel & (data.phase == "preload")
         if pre.any():
             f, u = f - data.force[pre].mean(0), u - data.disp[pre].mean(0)
-        labels.append(p), dirs.append(d), poses.append(P[POINT_LABELS.index(p)]), force.append(f), disp.append(u)
+        labels.append(p), dirs.append(d), poses.append(P[row]), force.append(f), disp.append(u)
     if not labels:
         raise ValueError(f"{data.source}: no 'total' readings")
     return Readings(tuple(labels), tuple(dirs), np.array(poses), np.array(force), np.array(disp))
@@ -219,7 +221,7 @@ def simulate(case, scale, *, points=POINT_LABELS, directions=None, model: str = 
         for d in directions:
             pts.append(p), dirs.append(d), force.append(case.loads.test_N * direction_unit(d))
     force = np.array(force)
-    rd = Readings(tuple(pts), tuple(dirs), test_points(case)[[POINT_LABELS.index(p) for p in pts]], force,
+    rd = Readings(tuple(pts), tuple(dirs), test_poses(case, pts), force,
                   np.zeros_like(force))
     disp = predict(case, rd, scale, model=model, joints=joints) + rng.normal(0.0, noise_m, force.shape)
     n = len(pts)

@@ -11,7 +11,8 @@ ladder** (:class:`femcheck.fe_device.joint_laws.MeasuredJointLaw`) and cached on
 A joint's specimen (:class:`JointSpecimen`) carries what the joint FE reads: the joint's ``hertz_point`` or
 ``hertz_line`` table (radius, lengths, materials) and the solid details a case of this kind does not describe
 (seat disc, yoke walls, pin clearance 10 um, friction, mesh sizes), at the defaults of
-:class:`femcheck.case.haptic_6psu_solid.SolidModel`.
+:class:`femcheck.case.haptic_6psu_solid.SolidModel`; the yoke wall and the rigid hub are narrowed where the
+defaults do not fit between the pins' span and contact length.
 
 The ladder spans the joint forces of the device at its nine test points under the test force in every
 direction: the force resultant is the same in every joint of a leg (no load along the leg), and with released
@@ -55,6 +56,28 @@ class DeviceJoint:
     specimen: JointSpecimen
 
 
+#: share of the room between a pin's bore and the next arm (the cross's other pin) the yoke wall may take, and of
+#: the pin length inside the span the rigid hub may tie
+YOKE_ROOM_SHARE = 0.9
+HUB_ROOM_SHARE = 0.8
+
+
+def _cross_fitted(pins) -> SolidModel:
+    """The default solid details with the yoke wall and the hub fitted into the pins' span where the defaults
+    do not fit (the arms of the two pins must not meet: span - contact length > 2 (r + clearance + wall))."""
+    base = SolidModel()
+    uj = base.universal_joint
+    rb = float(pins.pin_radius_m) + uj.pin_clearance_m
+    room = 0.5 * (float(pins.pin_span_m) - float(pins.contact_length_m))
+    wall = min(uj.yoke_wall_m, YOKE_ROOM_SHARE * (room - rb))
+    hub = min(uj.hub_half_length_m, HUB_ROOM_SHARE * room)
+    if wall <= 0:
+        from femcheck.errors import FemcheckError
+        raise FemcheckError(f"hertz_line: pin_span_m - contact_length_m = {2 * room:.4g} m leaves no room for the "
+                            f"yoke arms around pins of radius {pins.pin_radius_m} m (the joint's contact FE)")
+    return dataclasses.replace(base, universal_joint=dataclasses.replace(uj, yoke_wall_m=wall, hub_half_length_m=hub))
+
+
 def device_joints(case) -> tuple[DeviceJoint, ...]:
     """The case's joints that have a contact FE: S joints with ``hertz_point``, U joints with ``hertz_line``."""
     out = []
@@ -63,7 +86,8 @@ def device_joints(case) -> tuple[DeviceJoint, ...]:
             if j.type == "S" and j.hertz_point is not None:
                 out.append(DeviceJoint(i, k, "spherical", JointSpecimen(spherical_joint=j.hertz_point)))
             elif j.type == "U" and j.hertz_line is not None:
-                out.append(DeviceJoint(i, k, "universal", JointSpecimen(universal_joint=j.hertz_line)))
+                out.append(DeviceJoint(i, k, "universal", JointSpecimen(universal_joint=j.hertz_line,
+                                                                        solid=_cross_fitted(j.hertz_line))))
     return tuple(out)
 
 

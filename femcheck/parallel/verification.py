@@ -17,7 +17,7 @@ import numpy as np
 from femcheck.kinematics.directions import direction_unit
 from femcheck.parallel.beam_fe import device_fe_stiffness
 from femcheck.parallel.chain_model import evaluate
-from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.kinematics.points import POINT_LABELS, test_poses
 from femcheck.parallel.leg_kinematics import solve_legs
 
 COLUMNS = ("level", "joints", "point", "direction", "analytical_mm", "fe_mm", "rel_error_pct")
@@ -53,7 +53,7 @@ def verify_device(case, labels=None, levels=("simplified", "detailed"), joints=(
     """Analytical vs FE deflections of ``case`` at the test points ``labels`` (default P0..P8); ``parts``
     beam | solid, ``mesh`` the solid links' mesh level; ``progress(description)`` after each FE model."""
     labels = tuple(labels or POINT_LABELS)
-    P = test_points(case)[[POINT_LABELS.index(p) for p in labels]]
+    P = test_poses(case, labels)
     dev = case.device
     state = solve_legs(dev, P)
     rows = []
