@@ -50,6 +50,19 @@ class FeLaws:
     drives: dict = dataclasses.field(default_factory=dict)
 
 
+def fe_laws_of(case, joint_fe: bool = True, joint_mesh: str = "coarse", progress=None) -> FeLaws:
+    """The FE's own laws of a ``parallel_device`` case: each drive the case describes by its parts condensed from
+    its elements, and (``joint_fe``) every joint with a contact FE measured at ``joint_mesh`` (cached)."""
+    from femcheck.parallel.drive_fe import drive_stiffness, has_elements
+    drives = {i: drive_stiffness(j.drive) for i, leg in enumerate(case.legs) for j in leg.joints
+              if j.drive is not None and has_elements(j.drive)}
+    joints = {}
+    if joint_fe:
+        from femcheck.parallel.joint_specimen import measure_device_joint_laws
+        joints = measure_device_joint_laws(case, joint_mesh, progress=progress).laws
+    return FeLaws(joints=joints, drives=drives)
+
+
 class _Model:
     """Nodes as linear expressions of master coordinates ({first master index: (6, k) matrix})."""
 
