@@ -1,0 +1,173 @@
+"""The device FE of parallel devices on its own laws: drive elements, contact-FE joints, coverage.
+
+Fast tests use the drive elements and the closed-form joints (no contact FE); the contact-FE joint laws are
+measured (or read from the on-disk cache) in the tests marked slow.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from femcheck.case import load_case
+from femcheck.cli import get_app
+from tests.conftest import ROOT
+
+runner = CliRunner()
+HEXAPOD, DELTA = ROOT / "cases" / "hexapod_6ups.toml", ROOT / "cases" / "delta_3ruu.toml"
+
+
+def _drive(path):
+    case = load_case(path)
+    return next(j.drive for j in case.legs[0].joints if j.drive is not None)
+
+
+@pytest.mark.parametrize("path", [HEXAPOD, DELTA], ids=["axial", "torsional"])
+def test_drive_elements_condense_to_the_series_springs(path):
+    """The condensed shaft + gearbox (+ capstan + strand) elements against the series springs written here:
+    axial 1 / (l / (E pi d^2 / 4) + r^2 / (n^2 G pi D^4 / 32 / L)), torsional n^2 G pi D^4 / 32 / L. Both are
+    exact for these elements (a truss and a torsion bar), so 1e-12 (round-off of the Schur complement)."""
+    from femcheck.parallel.drive_fe import drive_stiffness
+    d = _drive(path)
+    k_shaft = d.shaft_G_Pa * math.pi * d.shaft_diameter_m**4 / 32.0 / d.shaft_length_m * d.gear_ratio**2
+    if d.law == "axial":
+        k_cable = d.cable_modulus_Pa * math.pi * d.cable_diameter_m**2 / 4.0 / d.cable_length_m
+        expected = 1.0 / (1.0 / k_cable + d.capstan_radius_m**2 / k_shaft)
+    else:
+        expected = k_shaft
+    assert drive_stiffness(d) == pytest.approx(expected, rel=1e-12)
+
+
+def test_drive_elements_do_not_read_the_drive_law(monkeypatch):
+    """A mistake put into the analytical drive law (the cable term x 3) moves the case's drive compliance, not the
+    FE's drive elements."""
+    import femcheck.compliance.actuation as act
+    from femcheck.parallel.drive_fe import drive_stiffness
+    d = _drive(HEXAPOD)
+    k0, c0 = drive_stiffness(d), d.compliance
+    real = act.cable_stiffness
+    monkeypatch.setattr(act, "cable_stiffness", lambda *a: real(*a) / 3.0)
+    assert d.compliance > 1.5 * c0          # the law moved
+    assert drive_stiffness(d) == k0         # the elements did not
+
+
+@pytest.fixture(scope="module")
+def delta_closed_joints():
+    """Delta coverage with the drive elements and the closed-form joints (no contact FE)."""
+    from femcheck.coverage.device_coverage import device_coverage
+    from femcheck.parallel.beam_fe import fe_laws_of
+    case = load_case(DELTA)
+    return case, device_coverage(case, fe_laws=fe_laws_of(case, joint_fe=False))
+
+
+def test_delta_coverage_links_and_drive_own_joints_shared(delta_closed_joints):
+    """The links (beam elements, not the cantilever law) and the drive (elements) are the FE's own: the FE does not
+    move with their mutation (response ratio ~0); the closed-form U joints are the same law on both sides (ratio 1,
+    never counted as caught). The links carry > 90 % of the Delta's compliance, so the covered share is >= 90 %."""
+    _, res = delta_closed_joints
+    rows = {e.element: e for e in res.elements}
+    assert res.base_passes and res.base_error_pct < 1.0     # beam FE = chain algebra to round-off; drive exact
+    for name in ("crank", "rod"):
+        assert rows[name].fe_source == "beam_elements" and rows[name].fe_response_ratio < 1e-9
+        assert rows[name].detected
+    assert rows["drive"].fe_source == "elements" and rows["drive"].fe_response_ratio < 1e-9
+    assert rows["hertz_line"].fe_source == "shared_closed_form" and not rows["hertz_line"].detected
+    assert rows["hertz_line"].fe_response_ratio == pytest.approx(1.0, abs=0.02)   # the same law on both sides
+    assert sum(e.share_pct for e in res.elements) == pytest.approx(100.0, abs=1e-6)
+    assert res.covered_share_pct >= 90.0
+
+
+def test_coverage_keeps_its_min_detectable_claim(delta_closed_joints):
+    """What coverage claims it would catch, it catches: a mutation of the crank 25 % above its min_detectable_pct
+    fails the check, one 25 % below passes (the error is linear in the law's compliance to within that margin)."""
+    from femcheck.coverage.device_coverage import device_coverage
+    from femcheck.parallel.beam_fe import fe_laws_of
+    case, res = delta_closed_joints
+    m = next(e for e in res.elements if e.element == "crank").min_detectable_pct
+    laws = fe_laws_of(case, joint_fe=False)
+    above = device_coverage(case, mutation_pct=1.25 * m, fe_laws=laws)
+    below = device_coverage(case, mutation_pct=0.75 * m, fe_laws=laws)
+    assert next(e for e in above.elements if e.element == "crank").detected
+    assert not next(e for e in below.elements if e.element == "crank").detected
+
+
+def test_without_drive_elements_the_drive_is_shared():
+    """With the FE taking the drive law as it is (no elements), the hexapod's drive (~97 % of its compliance) moves
+    both sides alike: it is not covered, and the covered share falls below 5 %."""
+    from femcheck.coverage.device_coverage import device_coverage
+    res = device_coverage(load_case(HEXAPOD), fe_laws=None)
+    drive = next(e for e in res.elements if e.element == "drive")
+    assert drive.fe_source == "shared_closed_form" and not drive.detected and drive.share_pct > 90.0
+    assert res.covered_share_pct < 5.0
+
+
+def test_coverage_cli_parallel_device_json(tmp_path):
+    out = tmp_path / "cov.json"
+    res = runner.invoke(get_app(), ["coverage", str(HEXAPOD), "--no-joint-fe", "--json", str(out)])
+    assert res.exit_code == 0, res.output
+    obj = json.loads(out.read_text())
+    assert obj["covered_share_pct"] >= 90.0 and obj["base_passes"]
+    assert [e["element"] for e in obj["elements"]] == ["strut", "drive", "hertz_point", "hertz_line"]
+    bad = runner.invoke(get_app(), ["coverage", str(HEXAPOD), "--no-joint-fe", "--parts", "shell"])
+    assert bad.exit_code == 2 and "--parts" in bad.output
+
+
+# ---- contact-FE joint laws (measured once, then cached on disk) ----------------------------------------
+
+@pytest.fixture(scope="module")
+def hexapod_laws():
+    from femcheck.parallel.beam_fe import fe_laws_of
+    case = load_case(HEXAPOD)
+    return case, fe_laws_of(case, joint_fe=True)
+
+
+@pytest.mark.slow
+def test_ball_in_seat_law_against_hertz(hexapod_laws):
+    """The hexapod's steel ball on its steel seat, contact FE at the coarse level, against Hertz (Johnson eq. 4.23):
+    approach within 3 % over the ladder (coarse mesh: 2.4 % at 1 N, < 1 % above 2 N measured) and the axial stick
+    tangent within 8 % of the Hertz tangent 3 F / (2 delta) (measured 2-6 %: the stick area slightly stiffer)."""
+    from femcheck.fe_device.contact_scales import device_springs
+    from femcheck.fe_device.loads import hertz_approach
+    from femcheck.parallel.joint_specimen import device_joints
+    case, laws = hexapod_laws
+    joint = next(j for j in device_joints(case) if j.kind == "spherical")
+    law = laws.joints[joint.leg, joint.joint][1]
+    sp = device_springs(joint.specimen)
+    F = law.loads_N
+    d_h = hertz_approach(F, sp.E_star_sp, sp.R_star_sp)
+    np.testing.assert_allclose(law.approach_m, d_h, rtol=0.03)
+    k = np.array([law.component_stiffness(f)[2] for f in F])
+    np.testing.assert_allclose(k, 1.5 * F / d_h, rtol=0.08)
+
+
+@pytest.mark.slow
+def test_pin_in_bore_law_between_line_contact_and_the_simply_supported_pin(hexapod_laws):
+    """The U joint's cross in its yokes, axial: stiffer than the pin simply supported over the whole span in series
+    with the line contact (1 / (c_uc + c_ub): the hub and the bores shorten the free pin), softer than the Hertz
+    line contact alone (K_uc = pi l E* / 2: the pin bends, the yokes deform). Measured 1.0e8 N/m in
+    [6.9e7, 1.1e9]."""
+    from femcheck.fe_device.contact_scales import device_springs
+    from femcheck.parallel.joint_specimen import device_joints
+    case, laws = hexapod_laws
+    joint = next(j for j in device_joints(case) if j.kind == "universal")
+    law = laws.joints[joint.leg, joint.joint][1]
+    sp = device_springs(joint.specimen)
+    k = np.array([law.component_stiffness(f)[2] for f in law.loads_N])
+    assert np.all(k > 1.0 / (sp.c_uc + sp.c_ub)) and np.all(k < 1.0 / sp.c_uc)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", [HEXAPOD, DELTA], ids=["hexapod", "delta"])
+def test_coverage_with_contact_fe_joints_reaches_90_pct(path):
+    """`femcheck coverage` with the joints' contact FE (the default): the joints are the FE's own (contact_fe, the
+    FE does not move with their law), the base pair passes, and >= 90 % of the compliance is covered."""
+    res = runner.invoke(get_app(), ["coverage", str(path), "--json", "-"])
+    assert res.exit_code == 0, res.output
+    obj = json.loads(res.output[res.output.index("{"):])
+    rows = {e["element"]: e for e in obj["elements"]}
+    assert rows["hertz_line"]["fe_source"] == "contact_fe" and rows["hertz_line"]["fe_response_ratio"] < 1e-9
+    assert obj["fe_joints"] == "contact_fe" and obj["base_passes"]
+    assert obj["covered_share_pct"] >= 90.0
