@@ -171,3 +171,35 @@ def test_coverage_with_contact_fe_joints_reaches_90_pct(path):
     assert rows["hertz_line"]["fe_source"] == "contact_fe" and rows["hertz_line"]["fe_response_ratio"] < 1e-9
     assert obj["fe_joints"] == "contact_fe" and obj["base_passes"]
     assert obj["covered_share_pct"] >= 90.0
+
+
+@pytest.mark.slow
+def test_contact_fe_joints_sit_at_the_statics_leg_force(hexapod_laws):
+    """The hexapod's struts are two-force members, so each joint carries the leg force of the released-joint
+    statics and only the joints' axial springs count. The FE with the contact-FE laws (at the force it finds by its
+    fixed point) must equal the chain model whose joint compliances are scaled to those laws at the statics force
+    (ball: Hertz tangent -> K_zz(F); pins: c_uc + c_ub -> 1 / K_zz(F)): the beam FE reproduces the chain algebra, so
+    1e-7 (a joint at a wrong force or along a wrong axis is off by percents)."""
+    from femcheck.kinematics.directions import direction_unit
+    from femcheck.kinematics.points import test_poses
+    from femcheck.parallel.beam_fe import device_fe_stiffness
+    from femcheck.parallel.chain_model import evaluate
+    case, laws = hexapod_laws
+    dev = case.device
+    P = test_poses(case, ("P0", "P3", "P6"))
+    names = dev.element_names
+    for d in ("+x", "+z"):
+        W = np.concatenate([case.loads.test_N * direction_unit(d), np.zeros(3)])
+        r0 = evaluate(dev, P, W, model="detailed", joints="released")
+        scale = np.ones((len(P), dev.n_legs, len(names)))
+        for i, leg in enumerate(dev.legs):
+            F = np.linalg.norm(r0.leg_wrench[:, i, :3], axis=1)
+            k_ball = np.array([laws.joints[leg.case_index, 2][1].component_stiffness(f)[2] for f in F])
+            k_pins = np.array([laws.joints[leg.case_index, 0][1].component_stiffness(f)[2] for f in F])
+            c_uc, c_ub, _ = leg.hertz_line[0]
+            scale[:, i, names.index("hertz_point")] = r0.hertz_stiffness[i, 2] / k_ball
+            scale[:, i, names.index("hertz_line")] = 1.0 / (k_pins * (c_uc + c_ub))
+        r1 = evaluate(dev, P, W, model="detailed", joints="released", element_scale=scale)
+        K = device_fe_stiffness(dev, P, fe_laws=laws, wrench=W, hertz_stiffness=r0.hertz_stiffness)
+        t = np.linalg.solve(K, np.broadcast_to(W, (len(P), 6))[..., None])[..., 0]
+        np.testing.assert_allclose(t[:, :3], r1.twist[:, :3], rtol=1e-7, atol=1e-7 * np.abs(r1.twist[:, :3]).max())

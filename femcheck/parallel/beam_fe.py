@@ -14,8 +14,9 @@ master-slave transformation (exact, no penalty) and everything but the TCP twist
 
 With ``fe_laws`` (:class:`FeLaws`) the FE takes nothing from the laws it checks: each passive joint with a
 contact FE (:mod:`femcheck.parallel.joint_specimen`) is three translational springs along its joint frame (the
-ball: isotropic, the contact FE's axial stick tangent K_zz(F); the U joint: x, y along its pins a1, a2 and z =
-a1 x a2, the diagonal K_xx, K_yy, K_zz(F) of the contact FE's stick tangent) at the joint force F the FE itself
+ball: isotropic, the contact FE's axial stick tangent K_zz(F); the U joint: the frame of its loaded link yoke, z
+along that link, y its pin, x = y x z, the diagonal K_xx, K_yy, K_zz(F) of the contact FE's stick tangent) at
+the joint force F the FE itself
 carries under the pose's wrench (fixed point, as the analytical model's Hertz linearization), its rotations as
 the joint's idealization (released: free; else locked); the drive is the spring condensed from its elements
 (:mod:`femcheck.parallel.drive_fe`).
@@ -117,9 +118,16 @@ def _contact_springs(leg, k, p, s, kind, law, F):
         frame = np.eye(3)
         kk = np.full(3, law.component_stiffness(F)[2])
     else:
+        # the contact FE's frame is its loaded link yoke's: z along that link, y its pin (a2), x = y x z. The yoke is
+        # on the link after the joint (its second axis), at the platform end on the link before (its first axis)
+        c = int(leg.joint_centre[k])
+        after = c < len(leg.links)
+        z = s.link_R[p, c if after else c - 1][:, 2]
         a1, a2 = (s.twists[p, d, 3:] for d in np.flatnonzero(leg.dof_joint == k)[:2])
-        z = np.cross(a1, a2)
-        frame = np.array([a1, a2, z / np.linalg.norm(z)]).T
+        y = a2 if after else a1
+        y = y - (y @ z) * z
+        y /= np.linalg.norm(y)
+        frame = np.array([np.cross(y, z), y, z]).T
         kk = law.component_stiffness(F)[:3]
     return np.vstack([frame, np.zeros((3, 3))]).T, kk
 
