@@ -16,10 +16,9 @@ With ``fe_laws`` (:class:`FeLaws`) the FE takes nothing from the laws it checks:
 contact FE (:mod:`femcheck.parallel.joint_specimen`) is three translational springs along its joint frame (the
 ball: isotropic, the contact FE's axial stick tangent K_zz(F); the U joint: the frame of its loaded link yoke, z
 along that link, y its pin, x = y x z, the diagonal K_xx, K_yy, K_zz(F) of the contact FE's stick tangent) at
-the joint force F the FE itself
-carries under the pose's wrench (fixed point, as the analytical model's Hertz linearization), its rotations as
-the joint's idealization (released: free; else locked); the drive is the spring condensed from its elements
-(:mod:`femcheck.parallel.drive_fe`).
+the joint force F the FE itself carries under the pose's wrench (fixed point, as the analytical model's Hertz
+linearization), its rotations as the joint's idealization (released: free; else locked); the drive is the
+spring condensed from its elements (:mod:`femcheck.parallel.drive_fe`).
 
 With the analytical model's element laws this reproduces :func:`femcheck.parallel.chain_model.evaluate`
 exactly in exact arithmetic (a cantilever's tip compliance is exact for beam elements), so the test asks
