@@ -144,7 +144,11 @@ def test_diagnose_locates_a_hidden_effect(path, kind, leg, factor, tmp_path):
         assert obj["best"]["what"] == f"{kind} in every leg" and obj["leg"] is None
         assert obj["effects"][0]["factor"] == pytest.approx(factor, rel=0.02)
     else:
-        assert obj["best"]["what"] == f"{kind} by leg"
-        assert obj["leg"]["name"] == dev.legs[leg].name and obj["leg"]["factor"] == pytest.approx(factor, rel=0.02)
-        assert [e["name"] for e in obj["effects"]] == [dev.legs[leg].name]
+        name = dev.legs[leg].name
+        assert obj["best"]["what"] == f"{kind} in legs {name}"
+        assert obj["leg"]["name"] == name and obj["leg"]["factor"] == pytest.approx(factor, rel=0.02)
+        assert obj["located"]["cause"] == f"{kind}_in_legs" and obj["located"]["legs"] == [name]
+        lo, hi = obj["located"]["factor_ci"]
+        assert lo < factor < hi
+        assert [e["name"] for e in obj["effects"]] == [name]
     assert obj["best"]["held_out_rms_mm"] < 0.02 * obj["best"]["rms_before_mm"]

@@ -248,8 +248,11 @@ def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_
               f"{b.held_out_rms_mm:.5f} mm")
     if not d.effects:
         con.print("no element's compliance moved beyond the threshold: the model explains the data")
-    elif d.leg is not None:
-        con.print(f"effect located: [bold]{escape(b.what.removesuffix(' by leg'))}[/] of leg [bold]{escape(d.leg[0])}[/] "
-                  f"x{d.leg[1]:.3g} of its modelled compliance")
+    elif d.located is not None:
+        loc = d.located
+        lo, hi = loc["factor_ci"]
+        con.print(f"effect located: [bold]{escape(loc['cause'])}[/]: {escape(loc['element'])} of leg"
+                  f"{'s' if len(loc['legs']) > 1 else ''} [bold]{escape(', '.join(loc['legs']))}[/] x{loc['factor']:.3g} "
+                  f"of its modelled compliance (95 % [{lo:.3g}, {hi:.3g}])")
     else:
         con.print("effect: " + ", ".join(f"[bold]{escape(n)}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")
