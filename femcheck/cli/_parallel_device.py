@@ -253,6 +253,6 @@ def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_
         lo, hi = loc["factor_ci"]
         con.print(f"effect located: [bold]{escape(loc['cause'])}[/]: {escape(loc['element'])} of leg"
                   f"{'s' if len(loc['legs']) > 1 else ''} [bold]{escape(', '.join(loc['legs']))}[/] x{loc['factor']:.3g} "
-                  f"of its modelled compliance (95 % [{lo:.3g}, {hi:.3g}])")
+                  f"of its modelled compliance (95 % [{lo:.4g}, {hi:.4g}])")
     else:
         con.print("effect: " + ", ".join(f"[bold]{escape(n)}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")

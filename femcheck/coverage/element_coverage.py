@@ -222,7 +222,7 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
                                     threshold, mutation_pct, kind))
         note(f"mutated {ELEMENT_NAMES[e]}")
         log.info("coverage %s: share %.1f %%, FE/analytical change %.3f, error %.2f -> %.2f %%", e,
-                 out[-1].share_pct, ratio, base, err)
+                 out[-1].share_pct, out[-1].fe_response_ratio, base, base + out[-1].error_change_pct)
     return summarize(out, mutation_pct=float(mutation_pct), points=points, mesh=mesh, joint_laws=sources,
                      fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
                      base_error_pct=base, seconds=time.perf_counter() - t0)
