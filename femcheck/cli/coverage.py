@@ -1,5 +1,6 @@
-"""``femcheck coverage CASE [--mutation PCT] [--points P0,P5] [--mesh coarse|default|fine] [--json OUT]``:
-how much of the detailed analytical model the FE verification checks (mutation of each element's law)."""
+"""``femcheck coverage CASE [--mutation PCT] [--points P0,P5] [--mesh coarse|default|fine] [--parts beam|solid]
+[--json OUT]``: how much of the detailed analytical model the FE verification checks (mutation of each element's
+law), for the 6-PSU and for ``parallel_device`` cases."""
 from __future__ import annotations
 
 from typing import Optional
@@ -39,6 +40,8 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
         if joint_mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--joint-mesh: {joint_mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
+        if parts not in ("beam", "solid"):
+            raise typer.BadParameter(f"--parts: {parts!r}; expected beam or solid")
         pts = tuple(p.strip().upper() for p in points.split(",") if p.strip())
         bad = [p for p in pts if p not in POINT_LABELS]
         if bad or not pts:
@@ -51,8 +54,6 @@ def register(app: typer.Typer) -> None:
             case = case.with_params(**parse_overrides(set_))
         con = console()
         if case.meta.kind == "parallel_device":
-            if parts not in ("beam", "solid"):
-                raise typer.BadParameter(f"--parts: {parts!r}; expected beam or solid")
             res = _device_coverage(case, pts, mutation, mesh, parts, joint_fe, joint_mesh, json_out)
             return _print(con, res, mutation, pts, mesh, json_out, case_path)
         from femcheck.coverage.element_coverage import progress_weights
