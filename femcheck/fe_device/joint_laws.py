@@ -185,7 +185,7 @@ def _cache_key(case, joint: str, mesh: str, ladder: np.ndarray) -> str:
     sizes = repr(joint_mesh_sizes(case, joint, mesh, float(ladder[-1])))
     inputs = {"joint": joint, "mesh": mesh, "ladder": [float(f) for f in ladder], "code": _code_version(), "mesh_sizes": sizes,
               "spherical_joint": repr(case.spherical_joint), "universal_joint": repr(case.universal_joint),
-              "solid": repr(case.solid)}
+              "solid": repr(case.solid), **({"hub_held": True} if getattr(case, "hub_held", False) else {})}
     return hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:32]
 
 

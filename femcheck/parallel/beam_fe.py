@@ -118,12 +118,12 @@ def _contact_springs(leg, k, p, s, kind, law, F):
         kk = np.full(3, law.component_stiffness(F)[2])
     else:
         # the contact FE's frame is its loaded link yoke's: z along that link, y its pin (a2), x = y x z. The yoke is
-        # on the link after the joint (its second axis), at the platform end on the link before (its first axis)
+        # on the link after the joint (its last axis), at the platform end on the link before (its first axis)
         c = int(leg.joint_centre[k])
         after = c < len(leg.links)
         z = s.link_R[p, c if after else c - 1][:, 2]
-        a1, a2 = (s.twists[p, d, 3:] for d in np.flatnonzero(leg.dof_joint == k)[:2])
-        y = a2 if after else a1
+        axes = [s.twists[p, d, 3:] for d in np.flatnonzero(leg.dof_joint == k)]   # an R joint: its one pin
+        y = axes[-1] if after else axes[0]
         y = y - (y @ z) * z
         y /= np.linalg.norm(y)
         frame = np.array([np.cross(y, z), y, z]).T

@@ -17,8 +17,9 @@ defaults do not fit between the pins' span and contact length.
 The ladder spans the joint forces of the device at its nine test points under the test force in every
 direction: the force resultant is the same in every joint of a leg (no load along the leg), and with released
 joints the leg forces follow from statics alone for these devices (one constraint per leg), so the ladder does
-not depend on any compliance law. A U joint on an R joint (a revolute's single pin in its bores) has no contact
-FE geometry yet: such a joint keeps its closed form in the FE (reported as shared by ``coverage``).
+not depend on any compliance law. An R joint's pin in its bores (``hertz_line`` on an R joint) is the cross's
+mesh with its hub held (``hub_held``): the link yoke's pin bears in its two bores and bends to the held hub, as a
+clevis pin in the other body's eye.
 """
 from __future__ import annotations
 
@@ -43,17 +44,25 @@ class JointSpecimen:
     spherical_joint: object = None
     universal_joint: object = None
     solid: SolidModel = SolidModel()
+    #: a revolute's pin in its bores: the cross's hub held, so only the link yoke's pin and bores carry the load
+    hub_held: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
 class DeviceJoint:
     """A passive joint of the case with a contact-FE geometry: ``leg`` (index of ``[[legs]]``), ``joint`` (index
-    in its ``joints``), ``kind`` 'spherical' | 'universal', its ``specimen``."""
+    in its ``joints``), ``kind`` 'spherical' | 'universal' | 'revolute', its ``specimen``."""
 
     leg: int
     joint: int
     kind: str
     specimen: JointSpecimen
+
+    @property
+    def fe_joint(self) -> str:
+        """The joint contact FE that measures it (:mod:`femcheck.fe_device.joint_fe`: a revolute is the cross
+        with its hub held)."""
+        return "universal" if self.kind == "revolute" else self.kind
 
 
 #: share of the room between a pin's bore and the next arm (the cross's other pin) the yoke wall may take, and of
@@ -79,15 +88,17 @@ def _cross_fitted(pins) -> SolidModel:
 
 
 def device_joints(case) -> tuple[DeviceJoint, ...]:
-    """The case's joints that have a contact FE: S joints with ``hertz_point``, U joints with ``hertz_line``."""
+    """The case's joints that have a contact FE: S joints with ``hertz_point``, U and R joints with ``hertz_line``
+    (an R joint: the cross's mesh with its hub held, so the link yoke's pin in its two bores is the revolute)."""
     out = []
     for i, leg in enumerate(case.legs):
         for k, j in enumerate(leg.joints):
             if j.type == "S" and j.hertz_point is not None:
                 out.append(DeviceJoint(i, k, "spherical", JointSpecimen(spherical_joint=j.hertz_point)))
-            elif j.type == "U" and j.hertz_line is not None:
-                out.append(DeviceJoint(i, k, "universal", JointSpecimen(universal_joint=j.hertz_line,
-                                                                        solid=_cross_fitted(j.hertz_line))))
+            elif j.type in ("U", "R") and j.hertz_line is not None:
+                out.append(DeviceJoint(i, k, "universal" if j.type == "U" else "revolute", JointSpecimen(universal_joint=j.hertz_line,
+                                                                        solid=_cross_fitted(j.hertz_line),
+                                                                        hub_held=j.type == "R")))
     return tuple(out)
 
 
@@ -125,7 +136,8 @@ def force_ladder(case, joint: DeviceJoint, forces: np.ndarray | None = None) -> 
 
 @dataclasses.dataclass(frozen=True)
 class DeviceJointLaws:
-    """The contact-FE laws of a device's joints: ``laws`` {(leg, joint): (kind, MeasuredJointLaw)}, keys as
+    """The contact-FE laws of a device's joints: ``laws`` {(leg, joint): (kind, MeasuredJointLaw)} (kind as
+    :class:`DeviceJoint`), keys as
     :class:`DeviceJoint` (``[[legs]]`` index, joint index)."""
 
     laws: dict
@@ -149,7 +161,7 @@ def measure_device_joint_laws(case, mesh: str = "coarse", use_cache: bool = True
         ladder = force_ladder(case, j, forces)
         key = (j.kind, j.specimen, tuple(np.round(ladder, 12)))
         if key not in done:
-            done[key] = measure_joint_law(j.specimen, j.kind, mesh, ladder, use_cache)
+            done[key] = measure_joint_law(j.specimen, j.fe_joint, mesh, ladder, use_cache)
             if progress:
                 progress(f"{j.kind} joint of legs[{j.leg}]")
         out[(j.leg, j.joint)] = (j.kind, done[key])
@@ -161,5 +173,5 @@ def cached(case, mesh: str = "coarse") -> dict:
     from femcheck.fe_device.joint_laws import _cache_key, _cache_path
 
     forces = leg_forces(case)
-    return {(j.leg, j.joint): _cache_path(_cache_key(j.specimen, j.kind, mesh, force_ladder(case, j, forces))).is_file()
+    return {(j.leg, j.joint): _cache_path(_cache_key(j.specimen, j.fe_joint, mesh, force_ladder(case, j, forces))).is_file()
             for j in device_joints(case)}
