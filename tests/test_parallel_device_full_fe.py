@@ -207,9 +207,9 @@ def test_contact_fe_joints_sit_at_the_statics_leg_force(hexapod_laws):
 
 @pytest.mark.parametrize("joint_fe", [False, pytest.param(True, marks=pytest.mark.slow)], ids=["closed-joints", "contact-fe"])
 def test_diagnose_names_a_hidden_drive_change_in_an_fe_world(joint_fe, tmp_path):
-    """A virtual hexapod measured by its device FE (beam links, drive elements, and the joints' contact FE or their
-    closed forms) with the drive of leg b2 twice as compliant (the FE takes that one leg's drive as a spring of the
-    doubled compliance), 0.2 um dial noise: diagnose keeps `drive in legs b2`, cause drive_in_legs, factor 2 within
+    """A virtual hexapod measured by its device FE (beam links, the joints' contact FE or their closed forms, each
+    drive a spring of the case's drive compliance, which its elements reproduce to 1e-16, leg b2's doubled),
+    0.2 um dial noise: diagnose keeps `drive in legs b2`, cause drive_in_legs, factor 2 within
     3 % (the FE and the model differ by 0.1-0.2 % unmutated) and its 95 % interval holds 2 within that margin.
     Closed-form joints: the kept candidate is `drive in legs b2` (one factor)."""
     import dataclasses
