@@ -52,7 +52,8 @@ def test_map_writes_a_png(path, tmp_path):
 
 @pytest.mark.parametrize("path, joint_fe", [(CASES[0], False), (CASES[1], False),
                                              pytest.param(CASES[0], True, marks=pytest.mark.slow),
-                                             pytest.param(CASES[1], True, marks=pytest.mark.slow)])
+                                             pytest.param(CASES[1], True, marks=pytest.mark.slow)],
+                         ids=["hexapod", "delta", "hexapod-joint-fe", "delta-joint-fe"])
 def test_verify_writes_tables_and_passes_check(path, joint_fe, tmp_path):
     """verify on a parallel device: the FE with solid links (coarse; P0, where the symmetric legs share one link
     mesh) within 2 % of the analytical model (measured 0.01-0.7 %: shear and the rigid end faces, which the
