@@ -97,7 +97,8 @@ def _print(con, res, mutation, pts, mesh, json_out, case_path) -> None:
         if json_out == "-":
             return
     t = Table(title=f"verification coverage: each law's compliance x {1 + mutation / 100:g} at {', '.join(pts)} "
-                    f"(FE {res.fe_joints} joints vs analytical {res.analytical_joints}, mesh {res.mesh}, "
+                    f"(FE {res.fe_joints} joints vs analytical {res.analytical_joints}, "
+                    f"{'beam-element links' if res.fe_links == 'beam' else f'mesh {res.mesh}'}, "
                     f"threshold {res.threshold_pct:g} %)")
     for h in ("element", "share %", "FE source", "error change (points)", "detected", "min detectable %"):
         t.add_column(h, justify="left" if h in ("element", "FE source") else "right")

@@ -103,7 +103,7 @@ def device_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, *, fe
                                     own.get(kind, link_kind)))
         note(f"mutated {kind}")
     has_joint_laws = fe_laws is not None and bool(fe_laws.joints)
-    return summarize(out, mutation_pct=float(mutation_pct), points=points, mesh=mesh if parts == "solid" else "beam",
+    return summarize(out, mutation_pct=float(mutation_pct), points=points, mesh=mesh, fe_links=parts,
                      fe_joints="contact_fe" if has_joint_laws else "closed_form", analytical_joints=joints,
                      threshold_pct=threshold, base_error_pct=base, seconds=time.perf_counter() - t0,
                      joint_laws=dict(joint_law_details or {}))

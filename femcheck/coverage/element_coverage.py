@@ -91,6 +91,8 @@ class CoverageResult:
     elements: tuple
     seconds: float
     joint_laws: dict = dataclasses.field(default_factory=dict)
+    #: parallel devices: the FE's links, "beam" (beam elements) or "solid" (meshed at ``mesh``); None: the 6-PSU FE
+    fe_links: str | None = None
 
     @property
     def base_passes(self) -> bool:
@@ -98,7 +100,8 @@ class CoverageResult:
         return self.base_error_pct <= self.threshold_pct
 
     def as_json(self) -> dict:
-        out = {k: v for k, v in dataclasses.asdict(self).items() if k != "elements"}
+        out = {k: v for k, v in dataclasses.asdict(self).items()
+               if k != "elements" and not (k == "fe_links" and v is None)}   # the 6-PSU's keys as they were
         out["base_passes"] = self.base_passes
         out["points"] = list(self.points)
         out["elements"] = [e.as_json() for e in self.elements]
