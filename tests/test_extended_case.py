@@ -200,13 +200,14 @@ def test_parallel_device_round_trip(tmp_path):
     csv, out, js = tmp_path / "m.csv", tmp_path / "ext.toml", tmp_path / "d.json"
     write_measured_csv(csv, *simulate(case, s, noise_m=2e-7), resolution_m=1e-7)
     assert main(["diagnose", path, str(csv), "--extended-case", str(out), "--json", str(js)]) == 0
-    assert "[model.element_scale]" in out.read_text() and "drive by leg" in out.read_text()
+    name = dev.legs[3].name
+    assert "[model.element_scale]" in out.read_text() and f"drive in legs {name}" in out.read_text()
     ext = load_case(out)
     data = read_measured_csv(csv)
     best = json.loads(js.read_text())["best"]
-    assert best["what"] == "drive by leg"
-    fitted = np.ones_like(s)          # the kept candidate's factors, as the JSON reports them
-    fitted[:, dev.element_names.index("drive")] = [best["factors"][lg.name] for lg in dev.legs]
+    assert best["what"] == f"drive in legs {name}"
+    fitted = np.ones_like(s)          # the kept candidate's factor, as the JSON reports it
+    fitted[3, dev.element_names.index("drive")] = best["factors"]["drive"]
     rd = readings_from(case, data)
     joints = case.model.joint_rotations
     after = predict(case, rd, fitted, model="detailed", joints=joints)

@@ -70,12 +70,22 @@ def stiffness(case, case_path, *, model: str, joints: str | None, point, pose, w
 VERIFY_THRESHOLD_PCT = 1e-6
 
 
-def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "default") -> None:
+def _own_laws_text(laws) -> str:
+    """What the solid-link FE's detailed level takes instead of the analytical drive and contact laws."""
+    drives = "drives from their elements" if laws.drives else "the analytical drive springs"
+    joints = "joint contacts from their contact FE" if laws.joints else "the analytical contact springs"
+    return f"{drives}, {joints}"
+
+
+def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "default", joint_fe: bool = True,
+           joint_mesh: str = "coarse") -> None:
     """Analytical vs FE at the test points: the solid-link FE (``mesh`` level) in errors_<level>.csv / .md, the
     beam-link FE (the chain algebra, to round-off) in errors_<level>_beam.csv / .md, a summary on screen;
     exit 1 above the verify thresholds (solid: simplified 5 %, detailed 10 % mean per level, idealization and
     direction; beam: 1e-6 %), with or without ``check`` (a parallel device has no drift baselines); the verdict
-    opens and closes the terminal output and is written to ``verdict.json``."""
+    opens and closes the terminal output and is written to ``verdict.json``. The solid-link FE's detailed level
+    takes the drives from their elements and, with ``joint_fe``, the joints from their contact FE (``joint_mesh``,
+    cached); the beam-link FE keeps the analytical laws (its check is the chain algebra)."""
     from femcheck.parallel.verification import verify_device
     from femcheck.report.atomic import write_text_atomic
     from femcheck.report.run_folder import prepare_run_folder
@@ -94,7 +104,10 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
     from femcheck.cli import progress as progress_bar
     # progress on stderr: stdout opens and closes with the verdict
     with progress_bar("FE models (solid links, then beam links)", 2 * n_models, console(stderr=True)) as bar:
-        solid = verify_device(case, labels, levels, parts="solid", mesh=mesh, progress=lambda d: bar.advance(1, d))
+        from femcheck.parallel.beam_fe import fe_laws_of
+        laws = fe_laws_of(case, joint_fe and "detailed" in levels, joint_mesh)
+        solid = verify_device(case, labels, levels, parts="solid", mesh=mesh, progress=lambda d: bar.advance(1, d),
+                              fe_laws=laws)
         beam = verify_device(case, labels, levels, progress=lambda d: bar.advance(1, d))
     from femcheck.verify.check import passed_or_failed, verdict as make_verdict
     checks, worst = [], []
@@ -143,7 +156,7 @@ def verify(case, case_path, *, levels, points, out, force, check, mesh: str = "d
         con.print(t)
     con.print(f"solid links: each link meshed (geometry builders, P2) and condensed; beam links: the analytical "
               f"cantilevers (max |error| {beam.max_abs_error_pct:.2e} %, a check of the chain algebra); joints as "
-              f"exact releases with the analytical drive and contact springs, rigid platform; max |error| with solid "
+              f"exact releases, rigid platform; solid links' detailed level: {_own_laws_text(laws)}; max |error| with solid "
               f"links {solid.max_abs_error_pct:.3f} % over {len(solid.rows)} deflections; wrote "
               f"{4 * len(levels) + 2} files to {out} (report.html)")
     _write_report(case, case_path, out, sections, checks, worst, solid, beam, mesh)
@@ -235,8 +248,11 @@ def diagnose(case, case_path, measured, *, model: str, joints: str | None, json_
               f"{b.held_out_rms_mm:.5f} mm")
     if not d.effects:
         con.print("no element's compliance moved beyond the threshold: the model explains the data")
-    elif d.leg is not None:
-        con.print(f"effect located: [bold]{escape(b.what.removesuffix(' by leg'))}[/] of leg [bold]{escape(d.leg[0])}[/] "
-                  f"x{d.leg[1]:.3g} of its modelled compliance")
+    elif d.located is not None:
+        loc = d.located
+        lo, hi = loc["factor_ci"]
+        con.print(f"effect located: [bold]{escape(loc['cause'])}[/]: {escape(loc['element'])} of leg"
+                  f"{'s' if len(loc['legs']) > 1 else ''} [bold]{escape(', '.join(loc['legs']))}[/] x{loc['factor']:.3g} "
+                  f"of its modelled compliance (95 % [{lo:.4g}, {hi:.4g}])")
     else:
         con.print("effect: " + ", ".join(f"[bold]{escape(n)}[/] x{f:.3g}" for n, f in d.effects) + " (every leg)")

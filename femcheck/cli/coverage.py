@@ -1,5 +1,6 @@
-"""``femcheck coverage CASE [--mutation PCT] [--points P0,P5] [--mesh coarse|default|fine] [--json OUT]``:
-how much of the detailed analytical model the FE verification checks (mutation of each element's law)."""
+"""``femcheck coverage CASE [--mutation PCT] [--points P0,P5] [--mesh coarse|default|fine] [--parts beam|solid]
+[--json OUT]``: how much of the detailed analytical model the FE verification checks (mutation of each element's
+law), for the 6-PSU and for ``parallel_device`` cases."""
 from __future__ import annotations
 
 from typing import Optional
@@ -21,6 +22,8 @@ def register(app: typer.Typer) -> None:
         joint_fe: bool = typer.Option(True, "--joint-fe/--no-joint-fe", help="the FE's passive joints as their contact "
                                       "FE measures them (cached; first run 1-3 min); off: the closed-form joint laws"),
         joint_mesh: str = typer.Option("coarse", "--joint-mesh", help="mesh of the joint contact FE: coarse | default | fine"),
+        parts: str = typer.Option("beam", "--parts", help="parallel devices: the FE's links as beam elements (beam) "
+                                  "or meshed solids (solid, at --mesh)"),
         set_: Optional[list[str]] = typer.Option(None, "--set", metavar="KEY=VALUE",
                                                  help="override a case key (TOML value), e.g. actuation.fe.model=elements; repeatable"),
     ):
@@ -37,6 +40,8 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter(f"--mesh: {mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
         if joint_mesh not in MESH_LEVELS:
             raise typer.BadParameter(f"--joint-mesh: {joint_mesh!r}; expected one of {', '.join(MESH_LEVELS)}")
+        if parts not in ("beam", "solid"):
+            raise typer.BadParameter(f"--parts: {parts!r}; expected beam or solid")
         pts = tuple(p.strip().upper() for p in points.split(",") if p.strip())
         bad = [p for p in pts if p not in POINT_LABELS]
         if bad or not pts:
@@ -44,10 +49,13 @@ def register(app: typer.Typer) -> None:
         if json_out and json_out != "-":
             from femcheck.report.atomic import check_output_file
             check_output_file(json_out, "--json")
-        case = load_case_for(case_path, "coverage")
+        case = load_case_for(case_path, "coverage", kinds=("haptic_6psu", "parallel_device"))
         if set_:
             case = case.with_params(**parse_overrides(set_))
         con = console()
+        if case.meta.kind == "parallel_device":
+            res = _device_coverage(case, pts, mutation, mesh, parts, joint_fe, joint_mesh, json_out)
+            return _print(con, res, mutation, pts, mesh, json_out, case_path)
         from femcheck.coverage.element_coverage import progress_weights
         from femcheck.fe_device.joint_laws import cached
         weights = progress_weights(len(pts), mesh, cached(case, joint_mesh) if joint_fe else None)
@@ -58,27 +66,55 @@ def register(app: typer.Typer) -> None:
                 laws = measure_joint_laws(case, joint_mesh, progress=lambda d: bar.advance(1, d))
             res = element_coverage(case, pts, mutation, mesh, jobs=jobs, progress=lambda d: bar.advance(1, d),
                                    joint_laws=laws)
-        if json_out:
-            emit_json(res.as_json(), json_out, inputs=[case_path])
-            if json_out == "-":
-                return
-        from rich.table import Table
-        t = Table(title=f"verification coverage: each law's compliance x {1 + mutation / 100:g} at {', '.join(pts)} "
-                        f"(FE {res.fe_joints} joints vs analytical {res.analytical_joints}, mesh {mesh}, "
-                        f"threshold {res.threshold_pct:g} %)")
-        for h in ("element", "share %", "FE source", "error change (points)", "detected", "min detectable %"):
-            t.add_column(h, justify="left" if h in ("element", "FE source") else "right")
-        for e in res.elements:
-            t.add_row(e.element, f"{e.share_pct:.1f}", e.fe_source, f"{e.error_change_pct:+.2f}", "yes" if e.detected else "no",
-                      "-" if e.min_detectable_pct is None else f"{e.min_detectable_pct:.0f}")
-        con.print(t)
-        con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance is caught by the FE at a "
-                  f"{mutation:g} % mutation; independent share: {res.independent_share_pct:.1f} % is modelled by the FE "
-                  f"on its own (base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s; joint laws on the FE side: "
-                  + ", ".join(f"{j} {s}" for j, s in res.joint_laws.items()) + ")")
-        if not res.base_passes:
-            con.print(f"[yellow]the unmutated model already fails the check ({res.base_error_pct:.2f} % > "
-                      f"{res.threshold_pct:g} %): every mutation is caught trivially[/yellow]")
+        _print(con, res, mutation, pts, mesh, json_out, case_path)
+
+
+def _device_coverage(case, pts, mutation, mesh, parts, joint_fe, joint_mesh, json_out):
+    """Coverage of a ``parallel_device`` case (:mod:`femcheck.coverage.device_coverage`)."""
+    from femcheck.cli import progress
+    from femcheck.coverage.device_coverage import device_coverage
+    from femcheck.parallel.beam_fe import fe_laws_of
+    from femcheck.parallel.joint_specimen import DeviceJointLaws, cached
+
+    missing = sum(not hit for hit in cached(case, joint_mesh).values()) if joint_fe else 0
+    # expected seconds (shared 2-core machine, measured): a joint's contact FE 100-150 s when not cached; the FE
+    # models at two points 2 s with beam links, about 60 s with solid links (their meshes; later steps reuse them)
+    weights = [0.01 + 120.0 * missing, 60.0 if parts == "solid" else 2.0] + [2.0] * len(case.device.element_names)
+    with progress("coverage", None, weights=weights, stderr=json_out == "-") as bar:
+        laws = fe_laws_of(case, joint_fe, joint_mesh)
+        bar.advance(1, "joint laws")
+        return device_coverage(case, pts, mutation, fe_laws=laws, parts=parts, mesh=mesh,
+                               joint_law_details=DeviceJointLaws(laws.joints).details(),
+                               progress=lambda d: bar.advance(1, d))
+
+
+def _print(con, res, mutation, pts, mesh, json_out, case_path) -> None:
+    """The coverage table (or its JSON)."""
+    from rich.table import Table
+
+    if json_out:
+        emit_json(res.as_json(), json_out, inputs=[case_path])
+        if json_out == "-":
+            return
+    t = Table(title=f"verification coverage: each law's compliance x {1 + mutation / 100:g} at {', '.join(pts)} "
+                    f"(FE {res.fe_joints} joints vs analytical {res.analytical_joints}, "
+                    f"{'beam-element links' if res.fe_links == 'beam' else f'mesh {res.mesh}'}, "
+                    f"threshold {res.threshold_pct:g} %)")
+    for h in ("element", "share %", "FE source", "error change (points)", "detected", "min detectable %"):
+        t.add_column(h, justify="left" if h in ("element", "FE source") else "right")
+    for e in res.elements:
+        t.add_row(e.element, f"{e.share_pct:.1f}", e.fe_source, f"{e.error_change_pct:+.2f}", "yes" if e.detected else "no",
+                  "-" if e.min_detectable_pct is None else f"{e.min_detectable_pct:.0f}")
+    con.print(t)
+    laws = ", ".join(f"{j} {s}" if isinstance(s, str) else f"{j} ({s['kind']}) {s['source']}"
+                     for j, s in res.joint_laws.items()) or "none"
+    con.print(f"covered share: {res.covered_share_pct:.1f} % of the detailed compliance is caught by the FE at a "
+              f"{mutation:g} % mutation; independent share: {res.independent_share_pct:.1f} % is modelled by the FE "
+              f"on its own (base error {res.base_error_pct:.2f} %; {res.seconds:.1f} s; joint laws on the FE side: "
+              f"{laws})")
+    if not res.base_passes:
+        con.print(f"[yellow]the unmutated model already fails the check ({res.base_error_pct:.2f} % > "
+                  f"{res.threshold_pct:g} %): every mutation is caught trivially[/yellow]")
 
 
 def parse_overrides(items) -> dict:

@@ -46,8 +46,9 @@ def register(app: typer.Typer) -> None:
         """Verify the analytical models against the device FE model on the test cube (seed 000 §4.2, §4.5).
 
         A parallel_device case (docs/parallel_device.md) is verified against the FE of its description with solid
-        links (--mesh) and with beam links: errors_<level>[_beam].csv/.md in --out; --jobs, --vtu, --joint-fe and
-        the baselines do not apply.
+        links (--mesh; the detailed level with the drives' elements and, --joint-fe, the joints' contact FE) and with
+        beam links (the analytical laws: the chain algebra): errors_<level>[_beam].csv/.md in --out; --jobs, --vtu
+        and the baselines do not apply.
 
         Writes errors_simplified.csv / errors_detailed.csv (point, direction, joints, analytical_mm, fe_mm,
         rel_error_pct (%); the detailed file compares the contact-joint FE with both idealizations, and
@@ -71,7 +72,7 @@ def register(app: typer.Typer) -> None:
         if case.kind == "parallel_device":
             from femcheck.cli._parallel_device import verify
             return verify(case, case_path, levels=LEVEL_CHOICES[level], points=points, out=out, force=force, check=check,
-                          mesh=mesh)
+                          mesh=mesh, joint_fe=joint_fe, joint_mesh=joint_mesh)
         pts = None
         if points:
             pts = [p.strip().upper() for p in points.split(",") if p.strip()]

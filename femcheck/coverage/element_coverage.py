@@ -91,6 +91,8 @@ class CoverageResult:
     elements: tuple
     seconds: float
     joint_laws: dict = dataclasses.field(default_factory=dict)
+    #: parallel devices: the FE's links, "beam" (beam elements) or "solid" (meshed at ``mesh``); None: the 6-PSU FE
+    fe_links: str | None = None
 
     @property
     def base_passes(self) -> bool:
@@ -98,7 +100,8 @@ class CoverageResult:
         return self.base_error_pct <= self.threshold_pct
 
     def as_json(self) -> dict:
-        out = {k: v for k, v in dataclasses.asdict(self).items() if k != "elements"}
+        out = {k: v for k, v in dataclasses.asdict(self).items()
+               if k != "elements" and not (k == "fe_links" and v is None)}   # the 6-PSU's keys as they were
         out["base_passes"] = self.base_passes
         out["points"] = list(self.points)
         out["elements"] = [e.as_json() for e in self.elements]
@@ -147,6 +150,38 @@ def _worst_mean_error_pct(a, f) -> float:
     return float(100 * np.max(np.mean(np.abs(a - f) / np.abs(f), axis=0)))
 
 
+def mutation_verdict(name: str, share_pct: float, unmutated, mutated, base: float, threshold: float,
+                     mutation_pct: float, independent_kind: str) -> ElementCoverage:
+    """One element's row (module doc) from the (analytical, FE) deflections without and with its mutation:
+    ``fe_source`` shared when the FE moved with the analytical model (ratio >= SHARED_RATIO), else
+    ``independent_kind`` (what models the element in the FE: 'meshed', 'contact_fe', 'elements')."""
+    (a0, f0), (a1, f1) = unmutated, mutated
+    da = float(np.mean(np.abs(a1 / a0 - 1)))
+    df = float(np.mean(np.abs(f1 / f0 - 1)))
+    ratio = df / da if da > 0 else float("nan")
+    source = "shared_closed_form" if ratio >= SHARED_RATIO else independent_kind
+    err = _worst_mean_error_pct(a1, f1)
+    slope = (err - base) / mutation_pct                    # percentage points of error per % of mutation
+    detected = err > threshold >= base        # a base that already fails cannot tell a mutation apart
+    # a shared law moves both sides alike: what little the error moves comes from the load protocol
+    # (secant vs tangent Hertz), not from a check of the law, so no mutation of it counts as caught
+    if source != "shared_closed_form" and slope > 1e-9:
+        mdp = max((threshold - base) / slope, 0.0)           # 0: the unmutated pair already fails
+        mdp = float(mdp) if mdp <= MAX_DETECTABLE_PCT else None
+    else:
+        mdp = None
+    return ElementCoverage(element=name, share_pct=share_pct, fe_source=source, error_change_pct=err - base,
+                           detected=bool(detected), min_detectable_pct=mdp, fe_response_ratio=ratio)
+
+
+def summarize(elements, **fields) -> CoverageResult:
+    """The :class:`CoverageResult` of the element rows: covered share (detected, not shared) and independent share."""
+    independent = [e for e in elements if e.fe_source != "shared_closed_form"]
+    return CoverageResult(covered_share_pct=float(sum(e.share_pct for e in independent if e.detected)),
+                          independent_share_pct=float(sum(e.share_pct for e in independent)),
+                          elements=tuple(elements), **fields)
+
+
 def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh: str = "coarse",
                      fe_joints: str = "contact", analytical_joints: str = "released", jobs: int = 1,
                      fe_models=None, progress=None, joint_laws=None) -> CoverageResult:
@@ -184,34 +219,13 @@ def element_coverage(case, points=("P0", "P5"), mutation_pct: float = 50.0, mesh
         springs = device_springs(case).with_law_scale(e, factor) if e in restated else None
         a1, f1, _ = _deflections(variant, points, directions, fe_models, fe_joints, analytical_joints, joint_laws,
                                  springs)
-        da = float(np.mean(np.abs(a1 / a0 - 1)))
-        df = float(np.mean(np.abs(f1 / f0 - 1)))
-        ratio = df / da if da > 0 else float("nan")
         joint = JOINT_OF_ELEMENT.get(ELEMENT_NAMES[e])
-        if ratio >= SHARED_RATIO:
-            source = "shared_closed_form"
-        else:
-            source = "contact_fe" if joint is not None and sources[joint] == "contact_fe" else "meshed"
-        err = _worst_mean_error_pct(a1, f1)
-        slope = (err - base) / mutation_pct                    # percentage points of error per % of mutation
-        detected = err > threshold >= base        # a base that already fails cannot tell a mutation apart
-        # a shared law moves both sides alike: what little the error moves comes from the load protocol
-        # (secant vs tangent Hertz), not from a check of the law, so no mutation of it counts as caught
-        if source != "shared_closed_form" and slope > 1e-9:
-            mdp = max((threshold - base) / slope, 0.0)           # 0: the unmutated pair already fails
-            mdp = float(mdp) if mdp <= MAX_DETECTABLE_PCT else None
-        else:
-            mdp = None
-        out.append(ElementCoverage(element=ELEMENT_NAMES[e], share_pct=100 * shares[ELEMENT_NAMES[e]], fe_source=source,
-                                   error_change_pct=err - base, detected=bool(detected), min_detectable_pct=mdp,
-                                   fe_response_ratio=ratio))
+        kind = "contact_fe" if joint is not None and sources[joint] == "contact_fe" else "meshed"
+        out.append(mutation_verdict(ELEMENT_NAMES[e], 100 * shares[ELEMENT_NAMES[e]], (a0, f0), (a1, f1), base,
+                                    threshold, mutation_pct, kind))
         note(f"mutated {ELEMENT_NAMES[e]}")
         log.info("coverage %s: share %.1f %%, FE/analytical change %.3f, error %.2f -> %.2f %%", e,
-                 out[-1].share_pct, ratio, base, err)
-    independent = [e for e in out if e.fe_source != "shared_closed_form"]
-    covered = sum(e.share_pct for e in independent if e.detected)
-    return CoverageResult(mutation_pct=float(mutation_pct), covered_share_pct=float(covered),
-                          independent_share_pct=float(sum(e.share_pct for e in independent)), points=points, mesh=mesh,
-                          joint_laws=sources,
-                          fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
-                          base_error_pct=base, elements=tuple(out), seconds=time.perf_counter() - t0)
+                 out[-1].share_pct, out[-1].fe_response_ratio, base, base + out[-1].error_change_pct)
+    return summarize(out, mutation_pct=float(mutation_pct), points=points, mesh=mesh, joint_laws=sources,
+                     fe_joints=fe_joints, analytical_joints=analytical_joints, threshold_pct=threshold,
+                     base_error_pct=base, seconds=time.perf_counter() - t0)

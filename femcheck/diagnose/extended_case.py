@@ -62,7 +62,7 @@ def refused_causes(fit) -> list[str]:
 
 def _scale_after(effects_values, m: int = 1) -> np.ndarray:
     """(6, 5) element scales after applying scale effects (in stage order) to an all-ones working state."""
-    from femcheck.diagnose.model import WorkingState
+    from femcheck.diagnose.working_state import WorkingState
     st = WorkingState(force=np.zeros((m, 3)), scale=np.ones((m, 6, 5)), c_rot=0.0, extra=np.zeros((m, 3)),
                       sensor=np.eye(3))
     for eff, v in sorted(effects_values, key=lambda ev: ev[0].stage):

@@ -17,6 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from femcheck.chain import ELEMENTS, ChainAdjustments, evaluate
+from femcheck.diagnose.working_state import WorkingState
 from femcheck.chain.haptic_6psu_model import MODEL_ELEMENTS
 
 #: element column indices in ``element_scale`` (order ``femcheck.chain.ELEMENTS``)
@@ -94,21 +95,6 @@ def _leg_geometry(case, pose: np.ndarray):
             _LEGS_CACHE.pop(next(iter(_LEGS_CACHE)))
         legs = _LEGS_CACHE[key] = (case, leg_geometry(case, pose))
     return legs[1]
-
-
-@dataclasses.dataclass
-class WorkingState:
-    """Mutable per-prediction arrays the effects act on (m states).
-
-    force (m, 3) N effective TCP force; scale (m, 6, 5) element compliance scales; c_rot rad/(N m);
-    extra (m, 3) m displacement added to the model's; sensor (3, 3) maps true to read displacement.
-    """
-
-    force: np.ndarray
-    scale: np.ndarray
-    c_rot: float
-    extra: np.ndarray
-    sensor: np.ndarray
 
 
 def predict_readings(model: ReadingModel, readings, effects=(), values=()) -> np.ndarray:

@@ -98,15 +98,24 @@ def closed_form_elements(case, joint_laws=None) -> frozenset:
 
 
 def device_springs(case) -> DeviceSprings:
-    """The :class:`DeviceSprings` of a 6-PSU ``case`` from its materials and geometry (module doc)."""
-    sj, uj, act = case.spherical_joint, case.universal_joint, case.actuation
-    E_sp = contact_modulus(sj.ball_material, sj.seat_material)
-    R_sp = 1.0 / (1.0 / float(sj.ball_radius_m) + float(sj.seat_curvature_1_per_m))
-    E_uj = contact_modulus(uj.pin_material, uj.bore_material)
-    K_uc = math.pi * float(uj.contact_length_m) * E_uj / 2.0
-    K_ub = 48.0 * uj.pin_material.E_Pa * (math.pi * float(uj.pin_radius_m) ** 4 / 4.0) / float(uj.pin_span_m) ** 3
-    k_cable = act.cable_modulus_Pa * math.pi * float(act.cable_diameter_m) ** 2 / 4.0 / act.cable_length_m
-    K_rotor = act.shaft_G_Pa * math.pi * float(act.shaft_diameter_m) ** 4 / 32.0 / act.shaft_length_m
-    k_motor = K_rotor / float(act.capstan_radius_m) ** 2
-    return DeviceSprings(E_star_sp=E_sp, R_star_sp=R_sp, F_min_sp=float(sj.min_contact_force_N), E_star_uj=E_uj,
-                         c_uc=1.0 / K_uc, c_ub=1.0 / K_ub, c_act=1.0 / k_cable + 1.0 / k_motor)
+    """The :class:`DeviceSprings` of a 6-PSU ``case`` from its materials and geometry (module doc). A joint
+    specimen of another device (:class:`femcheck.parallel.joint_specimen.JointSpecimen`) may lack the ball, the
+    pins or the actuation: their springs are then NaN (no FE step of that specimen reads them)."""
+    sj, uj, act = case.spherical_joint, case.universal_joint, getattr(case, "actuation", None)
+    nan = float("nan")
+    E_sp = R_sp = F_min = E_uj = K_uc = K_ub = c_act = nan
+    if sj is not None:
+        E_sp = contact_modulus(sj.ball_material, sj.seat_material)
+        R_sp = 1.0 / (1.0 / float(sj.ball_radius_m) + float(sj.seat_curvature_1_per_m))
+        F_min = float(sj.min_contact_force_N)
+    if uj is not None:
+        E_uj = contact_modulus(uj.pin_material, uj.bore_material)
+        K_uc = math.pi * float(uj.contact_length_m) * E_uj / 2.0
+        K_ub = 48.0 * uj.pin_material.E_Pa * (math.pi * float(uj.pin_radius_m) ** 4 / 4.0) / float(uj.pin_span_m) ** 3
+    if act is not None:
+        k_cable = act.cable_modulus_Pa * math.pi * float(act.cable_diameter_m) ** 2 / 4.0 / act.cable_length_m
+        K_rotor = act.shaft_G_Pa * math.pi * float(act.shaft_diameter_m) ** 4 / 32.0 / act.shaft_length_m
+        k_motor = K_rotor / float(act.capstan_radius_m) ** 2
+        c_act = 1.0 / k_cable + 1.0 / k_motor
+    return DeviceSprings(E_star_sp=E_sp, R_star_sp=R_sp, F_min_sp=F_min, E_star_uj=E_uj,
+                         c_uc=1.0 / K_uc, c_ub=1.0 / K_ub, c_act=c_act)

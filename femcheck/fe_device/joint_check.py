@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from femcheck.errors import FemcheckError
+from femcheck.fe_device.joint_forces import joint_loads, leg_forces  # noqa: F401  (the load state of the check)
 
 log = logging.getLogger(__name__)
 
@@ -30,33 +31,6 @@ log = logging.getLogger(__name__)
 TABLE_COMPONENTS = (("axial", 2), ("lateral", 0), ("tilt", 3), ("spin", 5))
 #: a law is flagged when it is off by more than this
 FLAG_PCT = 10.0
-
-
-def leg_forces(case, point: str = "P0") -> np.ndarray:
-    """(n_dir, 2, 6) leg forces (N, + = tension along u_i) at the eq. 1 levels (preload, preload + test)
-    for each of the case's test directions, from the released-joint statics J f = W (module doc)."""
-    from femcheck.fe_device.loads import direction_unit
-    from femcheck.kinematics.psu6 import POINT_LABELS, leg_geometry, test_points
-
-    label = point.upper()
-    if label not in POINT_LABELS:
-        raise FemcheckError(f"--point {point!r}: expected one of {', '.join(POINT_LABELS)}")
-    legs = leg_geometry(case, test_points(case)[[POINT_LABELS.index(label)]], labels=[label])
-    u, C, tcp = legs.u[0], legs.C[0], legs.tcp[0]
-    J = np.vstack([u.T, np.cross(C - tcp, u).T])
-    L = case.loads
-    levels = np.array([L.detailed_preload_N, L.detailed_preload_N + L.detailed_test_N])
-    dirs = np.array([direction_unit(d) for d in L.directions])
-    W = np.zeros((len(dirs), 2, 6))
-    W[:, :, :3] = levels[None, :, None] * dirs[:, None, :]
-    return np.linalg.solve(J[None, None], W[..., None])[..., 0]
-
-
-def joint_loads(case, point: str = "P0") -> tuple[float, float]:
-    """(F_5, F_20) N: the eq. 1 force levels of the most loaded joint (module doc)."""
-    f = np.abs(leg_forces(case, point))
-    d, leg = np.unravel_index(np.argmax(f[:, 1, :]), (f.shape[0], f.shape[2]))
-    return float(f[d, 0, leg]), float(f[d, 1, leg])
 
 
 #: expected relative cost of each joint's contact FE (the universal joint's coarse mesh has 2.5x the DOFs of the

@@ -190,13 +190,18 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
     basis = vector_basis(msh, 2)
     E, nu = _materials(pm, mats)
     K = assemble_stiffness(basis, E, nu)
-    nref = 2 if joint == "universal" else 1
+    # a revolute's pin in its bores (``hub_held``): the cross's hub is held (the pin sits in the other body's eye), so
+    # the load runs from the link yoke through the one pin a2 and its bores; the platform-yoke pin carries nothing
+    hub_held = joint == "universal" and bool(getattr(case, "hub_held", False))
+    nref = 2 if joint == "universal" and not hub_held else 1
     ndof, refs = cs.append_reference_nodes(basis.N, nref)
     ref_b = np.asarray(refs[0])
     ref_point_b = np.asarray(pm.regions[coupled].reference_point, float) if hasattr(pm, "regions") else np.zeros(3)
     pts, trip = dof_triplets(basis, basis.get_dofs(coupled).all())
     parts = [cs.clamp(ndof, basis.get_dofs(held).all()), cs.rigid_coupling(ndof, ref_b, ref_point_b, pts, trip)]
-    if joint == "universal":
+    if hub_held:
+        parts.append(cs.clamp(ndof, basis.get_dofs("uj_hub").all()))
+    elif joint == "universal":
         hp, ht = dof_triplets(basis, basis.get_dofs("uj_hub").all())
         hub_point = np.asarray(pm.regions["uj_hub"].reference_point, float)
         parts.append(cs.rigid_coupling(ndof, np.asarray(refs[1]), hub_point, hp, ht))

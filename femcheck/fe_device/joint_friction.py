@@ -111,7 +111,9 @@ def joint_friction(case, tilt_slip_ratio: float = 1.0, springs=None) -> JointFri
     m1, m2 = sj.ball_material, sj.seat_material
     G_star = 1.0 / ((2.0 - m1.nu) / m1.G_Pa + (2.0 - m2.nu) / m2.G_Pa)
     return JointFriction(mu_sp=so.spherical_joint.friction, mu_uj=so.universal_joint.friction,
-                         ball_radius_m=sj.ball_radius_m, pin_radius_m=uj.pin_radius_m,
+                         ball_radius_m=sj.ball_radius_m,
+                         pin_radius_m=uj.pin_radius_m if uj is not None else float("nan"),
                          E_star_Pa=sp.E_star_sp, R_star_m=sp.R_star_sp,
                          G_star_Pa=G_star, K_uc_N_per_m=1.0 / sp.c_uc,
-                         nu_pin=uj.pin_material.nu, tilt_slip_ratio=tilt_slip_ratio)
+                         nu_pin=uj.pin_material.nu if uj is not None else float("nan"),
+                         tilt_slip_ratio=tilt_slip_ratio)

@@ -87,6 +87,15 @@ class MeasuredJointLaw:
         k = np.clip(np.searchsorted(lF, np.log(np.maximum(F, 1e-300))) - 1, 0, p.size - 1)
         return np.exp(ld[k] + p[k] * (np.log(np.maximum(F, 1e-300)) - lF[k]))
 
+    def tangent_compliance(self, F) -> np.ndarray:
+        """dδ/dF (m/N) of the piecewise power law at F (N, any shape): p_k δ(F) / F on the segment of F
+        (the Hertz tangent (2/3) δ / F for p = 2/3); F floored at the ladder's first force."""
+        F = np.maximum(np.asarray(F, float), self.loads_N[0])
+        lF, ld = np.log(self.loads_N), np.log(self.approach_m)
+        p = np.diff(ld) / np.diff(lF)
+        k = np.clip(np.searchsorted(lF, np.log(F)) - 1, 0, p.size - 1)
+        return p[k] * self.approach(F) / F
+
     def secant(self, F) -> np.ndarray:
         """F / δ(F) (N/m): the secant stiffness that reproduces the joint force at that state."""
         F = np.asarray(F, float)
@@ -144,7 +153,7 @@ def force_ladder(case, points=None, levels: int = LADDER_LEVELS) -> np.ndarray:
     """(levels,) N: geometric ladder from the Hertz linearization floor ``min_contact_force_N`` to
     :data:`LADDER_MARGIN` × the largest leg force at the test points (released-joint statics J f = W at the
     eq. 1 test level, every test direction)."""
-    from femcheck.fe_device.joint_check import leg_forces
+    from femcheck.fe_device.joint_forces import leg_forces
     from femcheck.kinematics.psu6 import POINT_LABELS
 
     pts = list(points) if points else list(POINT_LABELS)
@@ -176,7 +185,7 @@ def _cache_key(case, joint: str, mesh: str, ladder: np.ndarray) -> str:
     sizes = repr(joint_mesh_sizes(case, joint, mesh, float(ladder[-1])))
     inputs = {"joint": joint, "mesh": mesh, "ladder": [float(f) for f in ladder], "code": _code_version(), "mesh_sizes": sizes,
               "spherical_joint": repr(case.spherical_joint), "universal_joint": repr(case.universal_joint),
-              "solid": repr(case.solid)}
+              "solid": repr(case.solid), **({"hub_held": True} if getattr(case, "hub_held", False) else {})}
     return hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:32]
 
 

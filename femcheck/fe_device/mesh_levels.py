@@ -78,7 +78,7 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
     """Sizes of the joint contact FE at ``level`` ('coarse' | 'default' | 'fine').
 
     spherical: graded on the Hertz radius a(F) of the largest load ``max_load_N`` (default: the most loaded
-    joint at P0, femcheck.fe_device.joint_check.joint_loads): contact edge a / 3, a / 4.5, a / 6 on a disc
+    joint at P0, femcheck.fe_device.joint_forces.joint_loads): contact edge a / 3, a / 4.5, a / 6 on a disc
     of radius 1.3 a, growing by 0.5 per unit distance from it; bulk = the case's spherical_joint_size_m at
     every level (so the fine level stays affordable; the level spread measures the contact zone).
     universal (``UNIVERSAL_GRADED``): the angles around pins and bores warped toward the loaded top/bottom
@@ -96,7 +96,7 @@ def joint_mesh_sizes(case, joint: str, level: str = "default", max_load_N: float
     if joint == "spherical":
         from femcheck.fe_device.joint_friction import joint_friction
         if max_load_N is None:
-            from femcheck.fe_device.joint_check import joint_loads
+            from femcheck.fe_device.joint_forces import joint_loads
             max_load_N = max(joint_loads(case, "P0"))
         a = float(joint_friction(case).contact_radius(float(max_load_N)))
         return JointMeshSizes(level, float(m.spherical_joint_size_m), a / JOINT_CONTACT_FRACTION[level],

@@ -32,7 +32,7 @@ substructuring with joint laws (the contact iterations act on the contact DOFs o
 once, coupled through every body of the leg).
 
 Load (seed 000 eq. 1). With ideal passive joints the leg is a two-force member: the released-joint
-statics J f = W (:func:`femcheck.fe_device.joint_check.leg_forces`) give its force f_i at the preload
+statics J f = W (:func:`femcheck.fe_device.joint_forces.leg_forces`) give its force f_i at the preload
 (5 N at the TCP) and at preload + test (20 N). The check takes the most compressed leg at the point
 (largest −f_i over the case's test directions; the ball can only be pushed into its seat) and applies
 |f_i| along −u_i at C_p; the platform holds C_p's other five components (as the joint FE holds node b's).
@@ -107,7 +107,7 @@ class LegLoad:
 def leg_load(case, point: str = "P0", chain: int | None = None) -> LegLoad:
     """Force and geometry of the leg the check loads: ``chain`` (default: the most compressed leg at
     ``point`` over the case's test directions). Raises when the chosen leg is not compressed."""
-    from femcheck.fe_device.joint_check import leg_forces
+    from femcheck.fe_device.joint_forces import leg_forces
     from geometry.build import leg_at
     from geometry.leg import frames
 

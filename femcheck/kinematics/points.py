@@ -21,6 +21,16 @@ def point_index(labels) -> list[int]:
     return [POINT_LABELS.index(p) for p in labels]
 
 
+def test_poses(case, labels=None) -> np.ndarray:
+    """(n, 6) platform poses [x, y, z, rx, ry, rz] (m, rad) of ``labels`` (default all nine) of ``case``'s test cube,
+    for a 6-PSU or a ``parallel_device`` case (the one place labels become poses)."""
+    labels = tuple(labels or POINT_LABELS)
+    if getattr(case.meta, "kind", None) == "parallel_device":
+        from femcheck.parallel.device import test_points as device_points
+        return device_points(case)[point_index(labels)]
+    return test_points(case)[point_index(labels)]
+
+
 @dataclasses.dataclass(frozen=True)
 class PointSet:
     """n test points: ``labels`` (n,), ``poses`` (n, 6) [x, y, z, rx, ry, rz] (m, rad), ``legs`` their
@@ -40,7 +50,7 @@ class PointSet:
 def point_set(case, labels=None) -> PointSet:
     """The :class:`PointSet` of ``labels`` (default all nine, P0..P8) of ``case``'s test cube (docs/conventions.md §8)."""
     labels = tuple(labels or POINT_LABELS)
-    poses = test_points(case)[point_index(labels)]
+    poses = test_poses(case, labels)
     poses.setflags(write=False)
     return PointSet(labels=labels, poses=poses, legs=leg_geometry(case, poses, labels=list(labels)))
 

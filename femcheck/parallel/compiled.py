@@ -26,7 +26,7 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     :class:`~femcheck.parallel.leg_kinematics.DeviceState` whose ``packed`` arrays feed :func:`evaluate_compiled`.
     ``numeric_only``: skip the closed forms (to check them against the numeric solution)."""
     from femcheck.parallel import chain_kernel as kern
-    from femcheck.parallel.leg_kinematics import DeviceState, LegState
+    from femcheck.parallel.leg_state import DeviceState, LegState
     tb = device_tables(device)
     n, L = P.shape[0], device.n_legs
     R, C_t = _targets(tb, device, P)

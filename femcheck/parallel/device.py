@@ -18,8 +18,7 @@ from femcheck.compliance import hertz_line_contact, hertz_point_contact, section
 from femcheck.compliance.sections import Section
 from femcheck.errors import FemcheckError
 from femcheck.kinematics.frames import rotvec_to_matrix, matrix_to_rotvec
-
-POINT_LABELS = tuple(f"P{k}" for k in range(9))
+from femcheck.kinematics.psu6 import POINT_LABELS  # noqa: F401  (the one definition of the labels)
 
 
 class DeviceError(FemcheckError, ValueError):

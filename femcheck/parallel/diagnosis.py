@@ -6,11 +6,15 @@ deflections. The candidate explanations are:
 
 - ``<kind> in every leg``: one factor for one element kind (a wrong material, section or law);
 - ``element kinds``: one factor per element kind, the same in every leg (several such errors);
-- ``<kind> by leg``: one factor per leg for one element kind (one soft drive, one cracked rod, ...).
+- ``<kind> by leg``: one factor per leg for one element kind (one soft drive, one cracked rod, ...);
+- ``<kind> in legs <names>``: one factor for one element kind in some legs only (the cause
+  ``<kind>_in_legs``, as the 6-PSU's located effects). The leg sets are screened from the by-leg fit: the legs in
+  order of how far their factor moved, the first one, the first two, ... (all legs is ``<kind> in every leg``).
 
 Each candidate is fitted by least squares in log factors on the translations (mm). The one with the best
 Bayesian information criterion ``m ln(RSS/m) + k ln m`` is kept (m readings x 3, k factors). Factors outside
-``[1/(1+t), 1+t]`` are named as effects, and for a by-leg candidate the leg whose factor moved most.
+``[1/(1+t), 1+t]`` are named as effects, and for a by-leg candidate the leg whose factor moved most; a kept
+by-leg or in-legs candidate is the ``located`` cause (element kind, legs, factor and its 95 % interval).
 
 The held-out error of the kept candidate is the leave-one-point-out RMS: refit without a test point's readings,
 then predict them. It says whether the factors carry over to points they did not see. Readings are the
@@ -26,7 +30,7 @@ from scipy.optimize import least_squares
 
 from femcheck.kinematics.directions import direction_unit
 from femcheck.parallel.chain_model import evaluate
-from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.kinematics.points import POINT_LABELS, point_index, test_poses
 from femcheck.parallel.leg_kinematics import solve_legs
 
 #: a factor outside [1/(1+t), 1+t] counts as an effect
@@ -48,12 +52,14 @@ class Readings:
 
 def readings_from(case, data) -> Readings:
     """Average the measured rows per (point, direction); total minus preload where both phases are given."""
-    P = test_points(case)
+    P = test_poses(case)
     keys = sorted({(p, d) for p, d in zip(data.point, data.direction)})
     labels, dirs, poses, force, disp = [], [], [], [], []
     for p, d in keys:
-        if p not in POINT_LABELS:
-            raise ValueError(f"{data.source}: point {p!r}; expected one of {', '.join(POINT_LABELS)}")
+        try:
+            row = point_index([p])[0]
+        except ValueError as exc:
+            raise ValueError(f"{data.source}: {exc}") from None
         sel = (data.point == p) & (data.direction == d)
         tot = sel & (data.phase == "total")
         if not tot.any():
@@ -62,7 +68,7 @@ def readings_from(case, data) -> Readings:
         pre = sel & (data.phase == "preload")
         if pre.any():
             f, u = f - data.force[pre].mean(0), u - data.disp[pre].mean(0)
-        labels.append(p), dirs.append(d), poses.append(P[POINT_LABELS.index(p)]), force.append(f), disp.append(u)
+        labels.append(p), dirs.append(d), poses.append(P[row]), force.append(f), disp.append(u)
     if not labels:
         raise ValueError(f"{data.source}: no 'total' readings")
     return Readings(tuple(labels), tuple(dirs), np.array(poses), np.array(force), np.array(disp))
@@ -103,6 +109,9 @@ class ParallelDiagnosis:
     #: intervals (low (L, E), high (L, E)); cells the candidate does not fit are 1
     scale: np.ndarray | None = None
     scale_ci: tuple = ()
+    #: the located cause of a kept by-leg or in-legs candidate: {"cause": "<kind>_in_legs", "element", "legs",
+    #: "factor", "factor_ci"} (by leg: the legs whose factor moved beyond the threshold, the largest factor)
+    located: dict | None = None
 
     def as_json(self) -> dict:
         def fit(f):
@@ -111,7 +120,8 @@ class ParallelDiagnosis:
                     "held_out_rms_mm": f.held_out_rms_mm}
         return {"best": fit(self.best), "candidates": [fit(c) for c in self.candidates],
                 "effects": [{"name": e, "factor": float(v)} for e, v in self.effects],
-                "leg": None if self.leg is None else {"name": self.leg[0], "factor": float(self.leg[1])}}
+                "leg": None if self.leg is None else {"name": self.leg[0], "factor": float(self.leg[1])},
+                "located": self.located}
 
 
 def _fit(case, rd: Readings, expand, n_par, *, model, joints, state, held_out: bool):
@@ -173,26 +183,54 @@ def diagnose(case, data, *, model: str = "detailed", joints: str | None = None,
             return s
         return expand
 
+    def in_legs(j, legs):
+        def expand(theta):
+            s = np.ones((L, E))
+            s[legs, j] = np.exp(theta[0])
+            return s
+        return expand
+
     specs = [(f"{names[j]} in every leg", (names[j],), one_kind(j), 1) for j in present]
     specs += [("element kinds", tuple(names[j] for j in present), by_kind, len(present))]
     specs += [(f"{names[j]} by leg", tuple(lg.name for lg in dev.legs), by_leg(j), L) for j in present]
     m = 3 * len(rd.labels)
     fits, scores = [], []
-    for what, fnames, expand, k in specs:
+
+    def run(what, fnames, expand, k):
         th, r0, r1, _, rss, se = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=False)
         fits.append((what, fnames, expand, k, th, r0, r1, se))
         scores.append(m * np.log(max(rss, 1e-300) / m) + k * np.log(m))
+        return th
+
+    for spec in specs:
+        th = run(*spec)
+        if spec[0].endswith(" by leg"):   # screen the leg sets: the legs in order of how far their factor moved
+            j = names.index(spec[0].removesuffix(" by leg"))
+            order = list(np.argsort(-np.abs(th), kind="stable"))
+            for n in range(1, L):
+                legs = sorted(order[:n])
+                run(f"{names[j]} in legs {','.join(dev.legs[i].name for i in legs)}", (names[j],), in_legs(j, legs), 1)
     what, fnames, expand, k, th, r0, r1, se = fits[int(np.argmin(scores))]
     _, _, _, held, _, _ = _fit(case, rd, expand, k, model=model, joints=joints, state=state, held_out=True)
     best = FitResult(what, fnames, np.exp(th), r0, r1, held, (np.exp(th - 1.96 * se), np.exp(th + 1.96 * se)))
     candidates = tuple(FitResult(w, n, np.exp(t), a, b, float("nan")) for w, n, _, _, t, a, b, _ in fits)
     effects = tuple((n, float(np.exp(t))) for n, t in zip(fnames, th) if abs(t) > np.log1p(threshold))
-    leg = None
+    leg, located = None, None
     if what.endswith(" by leg") and effects:
         i = int(np.argmax(np.abs(th)))
         leg = (fnames[i], float(np.exp(th[i])))
+        located = {"cause": f"{what.removesuffix(' by leg')}_in_legs", "element": what.removesuffix(" by leg"),
+                   "legs": [n for n, _ in effects], "factor": leg[1],
+                   "factor_ci": [float(np.exp(th[i] - 1.96 * se[i])), float(np.exp(th[i] + 1.96 * se[i]))]}
+    elif " in legs " in what and effects:
+        kind, legs = what.split(" in legs ")
+        located = {"cause": f"{kind}_in_legs", "element": kind, "legs": legs.split(","), "factor": float(np.exp(th[0])),
+                   "factor_ci": [float(np.exp(th[0] - 1.96 * se[0])), float(np.exp(th[0] + 1.96 * se[0]))]}
+        if len(located["legs"]) == 1:
+            leg = (located["legs"][0], located["factor"])
+        effects = tuple((n, located["factor"]) for n in located["legs"])
     return ParallelDiagnosis(best=best, candidates=candidates, effects=effects, leg=leg, scale=expand(th),
-                             scale_ci=(expand(th - 1.96 * se), expand(th + 1.96 * se)))
+                             scale_ci=(expand(th - 1.96 * se), expand(th + 1.96 * se)), located=located)
 
 
 def scale_problem(case, readings: Readings, *, model: str, joints: str) -> str | None:
@@ -219,7 +257,7 @@ def simulate(case, scale, *, points=POINT_LABELS, directions=None, model: str = 
         for d in directions:
             pts.append(p), dirs.append(d), force.append(case.loads.test_N * direction_unit(d))
     force = np.array(force)
-    rd = Readings(tuple(pts), tuple(dirs), test_points(case)[[POINT_LABELS.index(p) for p in pts]], force,
+    rd = Readings(tuple(pts), tuple(dirs), test_poses(case, pts), force,
                   np.zeros_like(force))
     disp = predict(case, rd, scale, model=model, joints=joints) + rng.normal(0.0, noise_m, force.shape)
     n = len(pts)

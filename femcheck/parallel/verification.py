@@ -5,8 +5,10 @@ model level and joint idealization, and their relative error.
 Two FE routes from the same description (:mod:`femcheck.parallel.beam_fe`): ``parts="beam"`` meshes the links with
 beam elements, which reproduce the analytical cantilevers exactly, so analytical vs beam FE checks the chain
 algebra (carrying, releases, the platform sum) to round-off; ``parts="solid"`` meshes every link as a solid
-(:mod:`femcheck.parallel.solid_links`) and condenses it, which checks the link laws as well. Both use the
-analytical laws for the drives and the joint contacts (no contact FE of these joints is written for this kind).
+(:mod:`femcheck.parallel.solid_links`) and condenses it, which checks the link laws as well. With ``fe_laws``
+(:func:`femcheck.parallel.beam_fe.fe_laws_of`: the drives' elements and the joints' contact FE) the detailed FE
+takes none of the analytical drive and joint laws; without, it takes them as they are (the beam route then checks
+the chain algebra to round-off).
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ import numpy as np
 from femcheck.kinematics.directions import direction_unit
 from femcheck.parallel.beam_fe import device_fe_stiffness
 from femcheck.parallel.chain_model import evaluate
-from femcheck.parallel.device import POINT_LABELS, test_points
+from femcheck.kinematics.points import POINT_LABELS, test_poses
 from femcheck.parallel.leg_kinematics import solve_legs
 
 COLUMNS = ("level", "joints", "point", "direction", "analytical_mm", "fe_mm", "rel_error_pct")
@@ -49,11 +51,12 @@ class VerificationRows:
 
 def verify_device(case, labels=None, levels=("simplified", "detailed"), joints=("rigid", "released"),
                   elements_per_link: int = 2, parts: str = "beam", mesh: str = "default",
-                  progress=None) -> VerificationRows:
+                  progress=None, fe_laws=None) -> VerificationRows:
     """Analytical vs FE deflections of ``case`` at the test points ``labels`` (default P0..P8); ``parts``
-    beam | solid, ``mesh`` the solid links' mesh level; ``progress(description)`` after each FE model."""
+    beam | solid, ``mesh`` the solid links' mesh level; ``fe_laws`` the detailed FE's own drive and joint laws
+    (module doc); ``progress(description)`` after each FE model."""
     labels = tuple(labels or POINT_LABELS)
-    P = test_points(case)[[POINT_LABELS.index(p) for p in labels]]
+    P = test_poses(case, labels)
     dev = case.device
     state = solve_legs(dev, P)
     rows = []
@@ -64,7 +67,8 @@ def verify_device(case, labels=None, levels=("simplified", "detailed"), joints=(
                 W = np.concatenate([case.loads.test_N * u, np.zeros(3)])
                 r = evaluate(dev, P, W, model=level, joints=jt, state=state)
                 K_fe = device_fe_stiffness(dev, P, model=level, joints=jt, hertz_stiffness=r.hertz_stiffness,
-                                           state=state, elements_per_link=elements_per_link, parts=parts, mesh=mesh)
+                                           state=state, elements_per_link=elements_per_link, parts=parts, mesh=mesh,
+                                           fe_laws=fe_laws if level == "detailed" else None, wrench=W)
                 if progress:
                     progress(f"{parts} FE {level} {jt} {d}")
                 t_fe = np.linalg.solve(K_fe, np.broadcast_to(W, (len(P), 6))[..., None])[..., 0]
