@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from femcheck.case.device_options import ActuationFE
+from femcheck.case.parallel_device import HertzLine
 from femcheck.case.schema import Material, option, quantity
 
 #: the tables of the layout: ``case.<table>`` and the dotted keys ``<table>.<field>`` of a case variant
@@ -89,14 +90,9 @@ class SphericalJoint:
             raise ValueError("seat_curvature_1_per_m: 1/R_ball + curvature must be > 0 (seat radius must exceed ball radius)")
 
 
-@dataclass(frozen=True)
-class UniversalJoint:
-    """Cross pins in yoke bores at C_i (Hertz line contact + simply supported pin bending)."""
-    pin_radius_m: float = quantity("m")
-    contact_length_m: float = quantity("m")
-    pin_span_m: float = quantity("m")
-    pin_material: Material = option()
-    bore_material: Material = option()
+#: the universal joint's table: cross pins in yoke bores at C_i (Hertz line contact + simply supported pin
+#: bending), every leg's ``hertz_line`` at its U joint
+UniversalJoint = HertzLine
 
 
 @dataclass(frozen=True)
