@@ -8,7 +8,10 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
     [platform]    home_pose = [x, y, z, rx, ry, rz] (m, rad; rotation vector), tcp_offset_m = [0, 0, 0]
     [symmetry]    copies = N        every [[legs]] entry is repeated N times about the base z axis (360/N deg)
     [workspace]   nominal_tcp_m, cube_edge_m, corner_signs (8 sign triples), rotation = [rx, ry, rz]
-    [loads]       test_N, directions
+    [loads]       test_N, directions; the two-level test protocol (optional): detailed_test_N, detailed_preload_N,
+                  simplified_test_N, simplified_preload_N
+    [actuation.fe], [measurement], [solid], [solver]   optional: the device FE's actuation model, the dial-gauge
+                  protocol, the solid parts and the sparse solver (femcheck.case.device_options)
     [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
         joints[k]  type = "R" | "U" | "S" | "P" | "F" (a clamp, first joint only), actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
                    P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
@@ -16,8 +19,12 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
         links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
                    "rigid", material, outer/inner_diameter_m (tube), width_m/depth_m (bar), x_axis (section x)
 
-A P joint has no centre: it sits inside the link between its neighbouring centred joints and slides along
-it (a telescopic strut). The last joint's centre is the leg's platform attachment; the platform frame at
+Six ``F-P*-S-U`` legs in the paper's pairs with one set of parts are the 6-PSU layout: its tables are read from
+the legs (:mod:`femcheck.case.psu_layout`; ``case.geometry``, ``case.guideway``, ...) and the case runs as
+``case.kind == "haptic_6psu"`` (cases/haptic_6psu.toml).
+
+A P joint has no centre: it sits inside the link between its neighbouring centred joints and slides along it (a
+telescopic strut). The last joint's centre is the leg's platform attachment; the platform frame at
 the home pose fixes where it is in the platform. The model is :mod:`femcheck.parallel`; the page
 ``docs/parallel_device.md`` is an annotated template.
 """
