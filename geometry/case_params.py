@@ -1,31 +1,14 @@
 """Part parameters taken from the case, and case variants with ``[solid]`` values changed."""
 from __future__ import annotations
 
-import copy
 import dataclasses
-import json
-
-from femcheck.case.registry import build_case
 
 
 def with_params(case, **dotted):
-    """A re-validated case variant with values set by dotted key; unlike ``case.with_params`` it also
-    creates the optional ``[solid...]`` tables when the case file does not have them, e.g.
-    ``with_params(case, **{"solid.spherical_joint.seat": "socket"})``."""
-    raw = copy.deepcopy(json.loads(case.raw_json))
-    for key, value in dotted.items():
-        parts = key.split(".")
-        node = raw
-        for p in parts[:-1]:
-            if p not in node and parts[0] == "solid":
-                node[p] = {}
-            node = node.get(p) if isinstance(node, dict) else None
-            if not isinstance(node, dict):
-                from femcheck.errors import CaseError
-                raise CaseError(case.source, key, "no such table in the case")
-        node[parts[-1]] = value
-    label = f"{case.source} (with {', '.join(f'{k}={v}' for k, v in dotted.items())})"
-    return build_case(raw, label)
+    """A re-validated case variant with values set by dotted key (:func:`femcheck.case.registry.with_params`: an
+    optional table absent from the file, e.g. ``[solid.spherical_joint]``, is created; a 6-PSU layout table, e.g.
+    ``spherical_joint.ball_radius_m``, writes the legs again), e.g. ``with_params(case, **{"solid.spherical_joint.seat": "socket"})``."""
+    return case.with_params(**dotted)
 
 
 def section_dict(obj) -> dict:

@@ -42,7 +42,7 @@ def test_bad_input_gives_one_clear_line(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(REFERENCE_CASE.read_text().replace("ball_radius_m = 0.0035", "ball_radius_m = 0"))
     assert main(["stiffness", str(bad)]) == 2
-    assert "spherical_joint.ball_radius_m" in capsys.readouterr().err
+    assert "legs[0].joints[2].hertz_point.ball_radius_m" in capsys.readouterr().err
 
 
 def test_map_writes_png(tmp_path):

@@ -101,14 +101,15 @@ def test_scale_check_passes_the_case_own_readings(case, model):
 def test_implausible_dimension_warns_on_the_first_line(tmp_path, case, capsys):
     text = open("cases/haptic_6psu.toml").read()
     import re
-    bad, n = re.subn(r"(?m)^outer_diameter_m\s*=\s*[0-9.eE+-]+", "outer_diameter_m = 6.0", text)
-    assert n == 1
+    # every leg's proximal tube (the case is written leg by leg): a mm value in a metre key
+    bad, n = re.subn(r"outer_diameter_m\s*=\s*0\.006", "outer_diameter_m = 6.0", text)
+    assert n == 6
     p = tmp_path / "mm_as_m.toml"
     p.write_text(bad)
     csv = _scaled_csv(tmp_path, case, 1000.0)   # stops at the scale check: the warning must already be out
     assert main(["diagnose", str(p), str(csv)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert "proximal_link.outer_diameter_m = 6 m" in err[0] and "larger than the device" in err[0], err
+    assert "legs[0].links[1].outer_diameter_m = 6 m" in err[0] and "larger than the device" in err[0], err
     from femcheck.case.plausibility import dimension_warnings
     assert dimension_warnings(case) == []   # the reference case itself is plausible
 

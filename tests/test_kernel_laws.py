@@ -64,7 +64,7 @@ def test_law_replaced_in_its_module_moves_the_parallel_kernel(law, monkeypatch):
     from femcheck.parallel.device import test_points as cube_points
     from femcheck.parallel.leg_kinematics import solve_legs
 
-    case = femcheck.load_case(ROOT / "cases" / "haptic_6psu_legs.toml")
+    case = femcheck.load_case(ROOT / "cases" / "haptic_6psu.toml")
     P = cube_points(case)
     before = evaluate_parallel(case.device, P, W, model="detailed", joints="rigid").twist
     module, attr, make = LAWS[law]

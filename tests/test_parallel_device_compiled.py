@@ -20,7 +20,7 @@ RTOL = 1e-9
 #: joint values: the numeric IK stops at |e| < 1e-11 (m, rad) and the joint values follow with the
 #: conditioning of the leg Jacobian (measured 2e-13)
 Q_TOL = 1e-9
-DEVICES = ("hexapod_6ups", "delta_3ruu", "haptic_6psu_legs")
+DEVICES = ("hexapod_6ups", "delta_3ruu", "haptic_6psu")
 
 
 @pytest.fixture(scope="module", params=DEVICES)
@@ -70,7 +70,7 @@ def test_compiled_model_reproduces_the_numpy_model(device_case, joints):
 def test_closed_form_ik_agrees_with_the_numeric_ik(device_case):
     name, case = device_case
     dev = case.device
-    expected = {"hexapod_6ups": IK_UPS, "haptic_6psu_legs": IK_PSU, "delta_3ruu": IK_RUU}[name]
+    expected = {"hexapod_6ups": IK_UPS, "haptic_6psu": IK_PSU, "delta_3ruu": IK_RUU}[name]
     assert (device_tables(dev).ik_kind == expected).all()
     P = _poses(name, case, n=100, seed=8)
     fast = solve_legs(dev, P)                                   # closed forms where the legs have one
@@ -88,7 +88,7 @@ def test_closed_form_ik_agrees_with_the_numeric_ik(device_case):
             assert np.abs(a.link_length - other.link_length).max() < Q_TOL
 
 
-@pytest.mark.parametrize("name", ["hexapod_6ups", "haptic_6psu_legs", "delta_3ruu"])
+@pytest.mark.parametrize("name", ["hexapod_6ups", "haptic_6psu", "delta_3ruu"])
 def test_closed_form_reports_unreachable_poses_like_the_numeric_ik(name):
     """Far outside the workspace the closed form has no real solution or violates a joint limit: both paths say
     the leg cannot reach the pose."""

@@ -8,7 +8,10 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
     [platform]    home_pose = [x, y, z, rx, ry, rz] (m, rad; rotation vector), tcp_offset_m = [0, 0, 0]
     [symmetry]    copies = N        every [[legs]] entry is repeated N times about the base z axis (360/N deg)
     [workspace]   nominal_tcp_m, cube_edge_m, corner_signs (8 sign triples), rotation = [rx, ry, rz]
-    [loads]       test_N, directions
+    [loads]       test_N, directions; the two-level test protocol (optional): detailed_test_N, detailed_preload_N,
+                  simplified_test_N, simplified_preload_N
+    [actuation.fe], [measurement], [solid], [solver]   optional: the device FE's actuation model, the dial-gauge
+                  protocol, the solid parts and the sparse solver (femcheck.case.device_options)
     [[legs]]      name, joints = [...]  (one table per joint, base to platform), links = [...]
         joints[k]  type = "R" | "U" | "S" | "P" | "F" (a clamp, first joint only), actuated, point_m (R/U/S: centre), axes (R: 1, U: 1 or 2, S: 3,
                    P: 1; optional for U, S, P), limits (R/P: range from home, rad or m), drive (actuated joint),
@@ -16,8 +19,12 @@ TOML layout (SI; positions in the base frame at the *home pose*)::
         links[j]   the member between the j-th and (j+1)-th centred joint (R/U/S): element = "tube" | "bar" |
                    "rigid", material, outer/inner_diameter_m (tube), width_m/depth_m (bar), x_axis (section x)
 
-A P joint has no centre: it sits inside the link between its neighbouring centred joints and slides along
-it (a telescopic strut). The last joint's centre is the leg's platform attachment; the platform frame at
+Six ``F-P*-S-U`` legs in the paper's pairs with one set of parts are the 6-PSU layout: its tables are read from
+the legs (:mod:`femcheck.case.psu_layout`; ``case.geometry``, ``case.guideway``, ...) and the case runs as
+``case.kind == "haptic_6psu"`` (cases/haptic_6psu.toml).
+
+A P joint has no centre: it sits inside the link between its neighbouring centred joints and slides along it (a
+telescopic strut). The last joint's centre is the leg's platform attachment; the platform frame at
 the home pose fixes where it is in the platform. The model is :mod:`femcheck.parallel`; the page
 ``docs/parallel_device.md`` is an annotated template.
 """
@@ -29,8 +36,11 @@ from typing import Literal
 
 import numpy as np
 
+from femcheck.case.device_options import DeviceActuation, LawScale, LegScale, Measurement, ReadingEffects
+from femcheck.case.haptic_6psu_solid import SolidModel
 from femcheck.case.schema import (CaseMeta as Meta, CaseRecord, Context, Material, build_materials, build_section,
                                   build_sections, option, quantity)
+from femcheck.case.solver_options import SolverOptions
 
 CASE_KIND = "parallel_device"
 
@@ -46,6 +56,14 @@ class ModelOptions:
         "-", check="nonnegative", default=None,
         doc="[model.element_scale]: per element kind (link names, drive, hertz_point, hertz_line, measured_law) one "
             "factor per leg (symmetry copies included) on its compliance; written by diagnose --extended-case")
+    hertz_force: Literal["own_joint_force_at_test_load"] = option(
+        "own_joint_force_at_test_load", doc="Hertz linearization force (docs/conventions.md §6)")
+    law_scale: LawScale = LawScale()
+    leg_scale: LegScale = LegScale()
+    joint_rotation_compliance_rad_per_Nm: float = quantity(
+        "rad/(N m)", check="nonnegative", default=0.0,
+        doc="compliance of every passive S/U joint rotation for rigid joints (joint_rotation_release; 0 = rigid)")
+    reading: ReadingEffects = ReadingEffects()
 
     def __post_init__(self):
         # held as sorted (kind, factors) pairs: the case is frozen and hashed (the resolved device is cached per case)
@@ -81,8 +99,27 @@ class Workspace:
 
 @dataclass(frozen=True)
 class Loads:
-    test_N: float = quantity("N", default=10.0, doc="TCP test force (the Hertz contacts are linearized at it)")
+    """The test loads at the TCP. The test protocol of a two-level campaign (the 6-PSU's, seed 000 §4.7): a
+    simplified experiment (preload, then preload + test force) and a detailed one; ``test_N`` is the detailed
+    test force where the file gives only that (and 10 N where it gives neither)."""
+    test_N: float | None = quantity("N", default=None, doc="TCP test force (the Hertz contacts are linearized at it)")
     directions: tuple[str, ...] = option(("+x", "-x", "+y", "-y", "+z", "-z"), doc="TCP load directions")
+    detailed_test_N: float | None = quantity("N", default=None, doc="detailed experiment's test force (default test_N)")
+    detailed_preload_N: float = quantity("N", check="nonnegative", default=0.0, doc="detailed experiment's preload")
+    simplified_test_N: float | None = quantity("N", default=None,
+                                               doc="simplified experiment's test force (default detailed_test_N)")
+    simplified_preload_N: float = quantity("N", check="nonnegative", default=0.0, doc="simplified experiment's preload")
+
+    def __post_init__(self):
+        test = self.test_N if self.test_N is not None else (self.detailed_test_N or 10.0)
+        object.__setattr__(self, "test_N", test)
+        if self.detailed_test_N is None:
+            object.__setattr__(self, "detailed_test_N", test)
+        if self.simplified_test_N is None:
+            object.__setattr__(self, "simplified_test_N", self.detailed_test_N)
+        bad = [d for d in self.directions if d not in ("+x", "-x", "+y", "-y", "+z", "-z")]
+        if bad:
+            raise ValueError(f"directions: {bad[0]!r} is not one of +x, -x, +y, -y, +z, -z")
 
 
 @dataclass(frozen=True)
@@ -228,8 +265,8 @@ class JointSpec:
             raise ValueError("drive: only the actuated joint has a drive")
         if self.drive is not None and self.drive.law != {"P": "axial", "R": "torsional"}[self.type]:
             raise ValueError(f"drive.law: {self.drive.law!r} does not fit a {self.type} joint")
-        if self.limits is not None and (self.type not in ("R", "P") or not self.limits[0] < 0 < self.limits[1]):
-            raise ValueError("limits: only for an R or P joint, as [low, high] around its home value 0")
+        if self.limits is not None and (self.type not in ("R", "P") or not self.limits[0] < self.limits[1]):
+            raise ValueError("limits: only for an R or P joint, as [low, high] from its home value (low < high)")
         if self.hertz_point is not None and self.type != "S":
             raise ValueError("hertz_point: only on an S joint")
         if self.hertz_line is not None and self.type not in ("R", "U"):
@@ -293,8 +330,54 @@ class ParallelDeviceCase(CaseRecord):
     workspace: Workspace
     loads: Loads
     legs: tuple[LegSpec, ...]
+    #: ``[actuation]``: the device FE's actuation model (the drives are the legs')
+    actuation_options: DeviceActuation = DeviceActuation()
+    #: ``[measurement]``: the dial-gauge protocol of a simulated or measured campaign (None: not stated)
+    measurement: Measurement | None = None
+    #: ``[solid]``: the solid (FE) parts of a 6-PSU layout (docs/fe_solver.md)
+    solid: SolidModel = SolidModel()
+    solver: SolverOptions = SolverOptions()
 
-    kind = CASE_KIND
+    @property
+    def kind(self) -> str:
+        """The model the case runs on: ``"haptic_6psu"`` where the legs are the 6-PSU layout
+        (:mod:`femcheck.case.psu_layout`: its chain model, device FE, coverage and diagnosis), else
+        ``"parallel_device"``. The file's ``[meta] kind`` is ``"parallel_device"`` for both."""
+        return "haptic_6psu" if self.layout is not None else CASE_KIND
+
+    @property
+    def layout(self):
+        """The 6-PSU tables read from the legs (:class:`~femcheck.case.psu_layout.PSULayout`), or None."""
+        from femcheck.case.psu_layout import psu_layout
+        return psu_layout(self)
+
+    def _table(self, name: str):
+        lay = self.layout
+        if lay is None:
+            raise AttributeError(f"{name}: only a 6-PSU layout has this table (femcheck.case.psu_layout)")
+        return getattr(lay, name)
+
+    # the paper's tables of a 6-PSU layout, read from the legs once (femcheck.case.psu_layout)
+    geometry = property(lambda self: self._table("geometry"))
+    guideway = property(lambda self: self._table("guideway"))
+    proximal_link = property(lambda self: self._table("proximal_link"))
+    spherical_joint = property(lambda self: self._table("spherical_joint"))
+    universal_joint = property(lambda self: self._table("universal_joint"))
+    base_points = property(lambda self: self._table("base_points"), doc="(6, 3) clamp points A_i, m")
+    platform_points = property(lambda self: self._table("platform_points"), doc="(6, 3) C_i, platform frame, m")
+    base_angles_rad = property(lambda self: self._table("base_angles_rad"))
+    platform_angles_rad = property(lambda self: self._table("platform_angles_rad"))
+
+    @property
+    def actuation(self):
+        """The 6-PSU's actuation table (every leg's drive and ``[actuation.fe]``) or, for another device, the
+        ``[actuation]`` section."""
+        lay = self.layout
+        return lay.actuation if lay is not None else self.actuation_options
+
+    @property
+    def n_chains(self) -> int:
+        return self.n_legs
 
     def material(self, name: str) -> Material:
         for m in self.materials:
@@ -326,7 +409,8 @@ def _device_for(case, laws):
 
 
 SECTIONS = {"meta": Meta, "model": ModelOptions, "platform": Platform, "symmetry": Symmetry,
-            "workspace": Workspace, "loads": Loads}
+            "workspace": Workspace, "loads": Loads, "actuation": DeviceActuation, "solid": SolidModel,
+            "solver": SolverOptions}
 
 
 def _check_leg(ctx: Context, i: int, leg: LegSpec) -> None:
@@ -461,8 +545,12 @@ def build(raw: dict, path) -> ParallelDeviceCase:
     A ``measured_law`` file is read here and inlined into ``raw`` (:class:`MeasuredLaw`)."""
     ctx = Context(path)
     ctx.materials = build_materials(ctx, raw.get("materials"))
-    parts = build_sections(ctx, raw, SECTIONS, optional=("meta", "model", "symmetry", "loads"),
-                           also_allowed=("materials", "legs"))
+    parts = build_sections(ctx, raw, SECTIONS, optional=("meta", "model", "symmetry", "loads", "actuation", "solid",
+                                                         "solver"),
+                           also_allowed=("materials", "legs", "measurement"))
+    parts["actuation_options"] = parts.pop("actuation")
+    if "measurement" in raw:
+        parts["measurement"] = build_section(ctx, "measurement", Measurement, raw["measurement"])
     legs_raw = raw.get("legs")
     if not isinstance(legs_raw, list) or not legs_raw:
         raise ctx.error("legs", "expected at least one [[legs]] table")
@@ -475,7 +563,9 @@ def build(raw: dict, path) -> ParallelDeviceCase:
     # test point be reachable; the error names the first leg that is not
     from femcheck.parallel.device import DeviceError, device_from_case
     try:
-        device_from_case(case, check_points=True)
+        # a 6-PSU layout is checked pose by pose by its inverse kinematics (an unreachable pose is named where it is
+        # evaluated; a sweep marks it), so that a variant of its tables (a shorter rail, say) still loads
+        device_from_case(case, check_points=case.layout is None)
     except DeviceError as exc:
         raise ctx.error(exc.key, str(exc)) from None
     return case

@@ -44,7 +44,7 @@ def _digest(raw: dict) -> str:
 def build_case(raw: dict, path):
     """Validate a parsed document into the case object of its kind."""
     meta = raw.get("meta", {})
-    kind = meta.get("kind", "haptic_6psu") if isinstance(meta, dict) else "haptic_6psu"
+    kind = meta.get("kind", "parallel_device") if isinstance(meta, dict) else "parallel_device"
     module = case_kind_module(kind) if isinstance(kind, str) and kind.isidentifier() else None
     if module is None:
         raise CaseError(path, "meta.kind", f"unknown case kind {kind!r}; expected one of {case_kinds()}")
@@ -79,6 +79,9 @@ def with_params(case, dotted: dict[str, object]):
     """
     raw = copy.deepcopy(json.loads(case.raw_json))
     label = f"{case.source} (with {', '.join(f'{k}={v}' for k, v in dotted.items())})"
+    if case.kind == "haptic_6psu":   # the paper's tables of a 6-PSU layout: its legs are written again
+        from femcheck.case.psu_layout import with_layout_params
+        dotted = with_layout_params(case, raw, dotted)
     for key, value in dotted.items():
         parts = key.split(".")
         node = raw

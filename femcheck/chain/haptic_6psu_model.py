@@ -216,7 +216,8 @@ def evaluate(case, poses, wrench=None, *, model: str = "detailed", joints: str |
 
     Parameters
     ----------
-    case : Haptic6PSUCase
+    case : a parallel_device case with the 6-PSU layout (``case.kind == "haptic_6psu"``; its tables
+        ``case.geometry``, ``case.guideway``, ... are read from the legs, :mod:`femcheck.case.psu_layout`)
     poses : (n, 6) float, TCP poses [x, y, z, rx, ry, rz] (m, rad; rotation vector)
     wrench : (6,) or (n, 6) float, TCP wrench [Fx, Fy, Fz, Mx, My, Mz] (N, N m); also the load at which
         the Hertz contacts are linearized. None = zero load (joints at ``min_contact_force_N``).

@@ -75,7 +75,7 @@ def register(app: typer.Typer) -> None:
         if case.meta.kind in ("serial_tree", "serial_robot"):
             return _diagnose_serial(case, case_path, measured, json_out, report, sigma_mm, folds,
                                     extended_case, compensation, poses)
-        if case.meta.kind == "parallel_device":
+        if case.kind == "parallel_device":
             from femcheck.cli._parallel_device import diagnose as diagnose_parallel
             return diagnose_parallel(case, case_path, measured, model=model.value,
                                      joints=joints.value if joints else None, json_out=json_out, force=force,

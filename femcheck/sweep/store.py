@@ -33,7 +33,8 @@ from femcheck.report.atomic import write_bytes_atomic, write_text_atomic
 log = logging.getLogger(__name__)
 
 #: source folders/files whose content defines the analytical results (part of the code version)
-_MODEL_SOURCES = ("chain", "compliance", "kinematics", "case/schema.py", "case/registry.py", "case/haptic_6psu.py",
+_MODEL_SOURCES = ("chain", "compliance", "kinematics", "case/schema.py", "case/registry.py", "case/parallel_device.py",
+                  "case/psu_layout.py", "case/device_options.py",
                   "case/haptic_6psu_solid.py", "sweep/evaluate_analytical.py")
 
 
