@@ -38,6 +38,7 @@ import numpy as np
 
 from femcheck.case.device_options import DeviceActuation, LawScale, LegScale, Measurement, ReadingEffects
 from femcheck.case.haptic_6psu_solid import SolidModel
+from femcheck.case.joint_contact_tables import HertzLine, HertzPoint
 from femcheck.case.schema import (CaseMeta as Meta, CaseRecord, Context, Material, build_materials, build_section,
                                   build_sections, option, quantity)
 from femcheck.case.solver_options import SolverOptions
@@ -164,32 +165,6 @@ class Drive:
             return float(1.0 / k_c + 1.0 / (k_m * self.gear_ratio**2))
         K_rotor = motor_stiffness_at_cable(self.shaft_G_Pa, self.shaft_diameter_m, self.shaft_length_m, 1.0)
         return float(1.0 / (K_rotor * self.gear_ratio**2))
-
-
-@dataclass(frozen=True)
-class HertzPoint:
-    """Ball in a seat at an S joint centre (``femcheck.compliance.hertz_point_contact``), linearized at the joint's
-    own force under the test wrench (floored at ``min_contact_force_N``)."""
-    ball_radius_m: float = quantity("m")
-    ball_material: Material = option()
-    seat_material: Material = option()
-    seat_curvature_1_per_m: float = quantity("1/m", check="any", default=0.0, doc="0 flat; concave seat -1/R_s")
-    min_contact_force_N: float = quantity("N", default=1.0)
-
-    def __post_init__(self):
-        if 1.0 / self.ball_radius_m + self.seat_curvature_1_per_m <= 0:
-            raise ValueError("seat_curvature_1_per_m: 1/R_ball + curvature must be > 0")
-
-
-@dataclass(frozen=True)
-class HertzLine:
-    """Pins in bores at an R or U joint (``femcheck.compliance.hertz_line_contact``): line contact in every
-    direction, plus pin bending along the adjacent link's axis; load-independent."""
-    pin_radius_m: float = quantity("m")
-    contact_length_m: float = quantity("m")
-    pin_span_m: float = quantity("m")
-    pin_material: Material = option()
-    bore_material: Material = option()
 
 
 @dataclass(frozen=True)
@@ -350,6 +325,14 @@ class ParallelDeviceCase(CaseRecord):
         """The 6-PSU tables read from the legs (:class:`~femcheck.case.psu_layout.PSULayout`), or None."""
         from femcheck.case.psu_layout import psu_layout
         return psu_layout(self)
+
+    def expand_params(self, raw: dict, dotted: dict[str, object]) -> dict[str, object]:
+        """Dotted keys of the derived 6-PSU tables (``"guideway.width_radial_m"``) written into ``raw``'s legs; the
+        keys left to set as they are returned (:func:`femcheck.case.registry.with_params`)."""
+        if self.layout is None:
+            return dotted
+        from femcheck.case.psu_layout import with_layout_params
+        return with_layout_params(self, raw, dotted)
 
     def _table(self, name: str):
         lay = self.layout

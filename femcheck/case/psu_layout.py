@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from femcheck.case.device_options import ActuationFE
-from femcheck.case.parallel_device import HertzLine
+from femcheck.case.joint_contact_tables import HertzLine
 from femcheck.case.schema import Material, option, quantity
 
 #: the tables of the layout: ``case.<table>`` and the dotted keys ``<table>.<field>`` of a case variant

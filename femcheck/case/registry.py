@@ -79,9 +79,9 @@ def with_params(case, dotted: dict[str, object]):
     """
     raw = copy.deepcopy(json.loads(case.raw_json))
     label = f"{case.source} (with {', '.join(f'{k}={v}' for k, v in dotted.items())})"
-    if case.kind == "haptic_6psu":   # the paper's tables of a 6-PSU layout: its legs are written again
-        from femcheck.case.psu_layout import with_layout_params
-        dotted = with_layout_params(case, raw, dotted)
+    expand = getattr(case, "expand_params", None)   # keys of tables a case derives (a 6-PSU layout's, from its legs)
+    if expand is not None:
+        dotted = expand(raw, dotted)
     for key, value in dotted.items():
         parts = key.split(".")
         node = raw
