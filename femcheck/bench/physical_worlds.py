@@ -214,15 +214,43 @@ def summarize(rows: list) -> dict:
             "rows": rows}
 
 
-def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse") -> dict:
+def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
+        detail: str = DETAIL_PATH) -> dict:
+    """The flat figures of ``n_worlds`` worlds from ``seed``; each world's row is printed as it comes and the rows
+    so far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
     from concurrent.futures import ProcessPoolExecutor
     from functools import partial
+    from femcheck.report.atomic import write_text_atomic
     seeds = range(seed, seed + n_worlds)
     one = partial(run_world, mesh=mesh)
+    rows: list = []
+
+    def keep(row, done: bool = False):
+        if row is not None:
+            rows.append(row)
+            print(_line(row), flush=True)
+        write_text_atomic(detail, json.dumps({"complete": done, "worlds": rows}, indent=2) + "\n")
     if jobs <= 1:
-        return summarize([one(s) for s in seeds])
-    with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
-        return summarize(list(ex.map(one, seeds)))
+        for s in seeds:
+            keep(one(s))
+    else:
+        with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
+            for row in ex.map(one, seeds):
+                keep(row)
+    keep(None, done=True)
+    fig = summarize(rows)
+    fig.pop("rows")
+    return {**fig, "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
+
+
+def table(figures: dict) -> str:
+    """The confusion table of the single changes, from the rows the run kept (``make bench``'s summary)."""
+    return confusion_table(json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"])
+
+
+def _line(r: dict) -> str:
+    return (f"seed {r['seed']}: {_short(r['changes'])} -> {', '.join(r['named']) or 'none'} ({r['verdict']}, "
+            f"{r['cpu_s']} s CPU)")
 
 
 def main(argv=None) -> int:
@@ -237,20 +265,14 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from femcheck.bench.__main__ import machine
     from femcheck.report.atomic import write_text_atomic
-    t0, c0 = time.perf_counter(), time.process_time()
-    fig = run(a.worlds, a.seed, a.jobs, a.mesh)
-    rows = fig.pop("rows")
+    t0 = time.perf_counter()
+    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail)
     command = (f"python -m femcheck.bench.physical_worlds --worlds {a.worlds} --seed {a.seed} --jobs {a.jobs}"
                f" --mesh {a.mesh}")
-    fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig,
-           "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": a.mesh, "command": command}
+    fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig, "command": command}
     write_text_atomic(a.out, json.dumps(fig, indent=2) + "\n")
-    write_text_atomic(a.detail, json.dumps({"command": command, "worlds": rows}, indent=2) + "\n")
     print(json.dumps(fig, indent=2))
-    print(confusion_table(rows))
-    for r in rows:
-        print(f"seed {r['seed']}: {_short(r['changes'])} -> {', '.join(r['named']) or 'none'} ({r['verdict']}, "
-              f"{r['cpu_s']} s CPU)")
+    print(table(fig))
     return 0
 
 
