@@ -94,3 +94,27 @@ def test_contact_fe_world_is_not_named_clearance(case):
     measured tilt slip ratio (coarse meshes)."""
     d = _fe_world_diagnosis(case, DeviceFEWorld.of(case), seed=12)
     assert "clearance" not in {c.id for c in d.causes}, [c.id for c in d.causes]
+
+
+def test_anchored_chain_reads_the_case_fe_and_names_nothing_on_it(case):
+    """The chain anchored on the unchanged case's device FE reads that FE at the nominal parameters (at the gap
+    table's load levels exactly: the readings' 5/20 N and the sweep; between levels the gap is linear in the load,
+    here within 2 % of the deflection at 3.7 N), and diagnosing the unchanged FE world through it names no cause
+    (through the plain rigid chain such readings are named joint_rotation_release and spherical_joint_in_legs)."""
+    from femcheck.diagnose import diagnose
+    from femcheck.diagnose.fe_model import FEAnchoredChainModel
+    from femcheck.experiment.dial_gauge import dial_campaign
+    from femcheck.measured import process
+    world = _light(case)
+    r = process(dial_campaign(case, {"device": world}, seed=13, directions=BOTH_SIGNS).data, case)
+    tot = r.total_state
+    model = FEAnchoredChainModel.nearest(case, _light(case), r.pose[tot], r.force[tot])
+    assert model.joints == "released"   # frictional joints slip at the test loads
+    P = point_poses(case)[[5, 5, 5]]
+    F = np.array([[20.0, 0, 0], [0, -5.0, 0], [0, 0, 3.7]])
+    got = model.tcp_displacement(P, F, model.base_scale)
+    want = world.tcp_displacement(P, F)
+    np.testing.assert_allclose(got[:2], want[:2], rtol=1e-12, atol=1e-15)
+    assert np.linalg.norm(got[2] - want[2]) < 0.02 * np.linalg.norm(want[2])
+    d = diagnose(model, r, with_baseline=False)
+    assert [c.id for c in d.causes if c.id != "none"] == [], [c.id for c in d.causes]
