@@ -22,7 +22,8 @@ reference's law (the on-disk joint-law cache is then hit by the reference case's
 Readings: :meth:`DeviceFEWorld.tcp_displacement` (m, 3) under TCP forces at test points P0..P8, one nonlinear
 device solve per distinct (point, force), loading branch (the joint law is the secant of a monotonic load, as in
 :mod:`femcheck.diagnose.fe_model`). Mesh: ``mesh`` of the solid parts ("coarse" for the bench), ``joint_mesh`` of
-the joint contact FE; ``joint_fe`` False uses the closed-form joint springs (frictional joints still).
+the joint contact FE; ``joint_fe`` False uses the closed-form joint springs (frictional joints still), a tuple
+of joint types ("spherical", "universal") the contact-FE laws of those only.
 """
 from __future__ import annotations
 
@@ -65,7 +66,7 @@ class DeviceFEWorld:
     mesh: str = "coarse"
     joint_mesh: str = "coarse"
     kind: str = "solid"
-    joint_fe: bool = True
+    joint_fe: bool | tuple = True
     tilt_slip_ratio: float | None = None
 
     def __post_init__(self):
@@ -76,9 +77,17 @@ class DeviceFEWorld:
             if _geometry_key(c) != g:
                 raise ValueError(f"leg {i}: its case changes the device geometry; a world of changed legs keeps "
                                  "the reference geometry")
-        if not self.joint_fe and len({repr((c.spherical_joint, c.universal_joint)) for c in self.leg_cases}) > 1:
+        closed = [j for j in ("spherical", "universal") if j not in self._measured]
+        if any(len({repr(getattr(c, f"{j}_joint")) for c in self.leg_cases}) > 1 for j in closed):
             raise ValueError("closed-form joint springs are one per device: legs with different joints need "
                              "joint_fe=True")
+
+    @property
+    def _measured(self) -> tuple:
+        """The joint types that take their contact-FE law (``joint_fe``: True = both, False = none, or a tuple)."""
+        if isinstance(self.joint_fe, bool):
+            return ("spherical", "universal") if self.joint_fe else ()
+        return tuple(self.joint_fe)
 
     @classmethod
     def of(cls, case, **kw) -> "DeviceFEWorld":
@@ -87,7 +96,8 @@ class DeviceFEWorld:
 
     @property
     def name(self) -> str:
-        laws = "contact-FE joint laws" if self.joint_fe else "closed-form joint springs"
+        laws = (f"contact-FE laws of the {' and '.join(self._measured)} joints" if self._measured
+                else "closed-form joint springs")
         return f"device FE, detailed level (frictional contact joints, {laws}, {self.kind} parts, mesh {self.mesh})"
 
     # ---- parts, each cached by the inputs it reads
@@ -134,10 +144,10 @@ class DeviceFEWorld:
         friction = dataclasses.replace(fr[0], **fields)
         # the closed-form springs only fill in where the FE has no law of its own (one per device: __post_init__)
         springs = device_springs(self.leg_cases[0])
-        if not self.joint_fe:
+        if not self._measured:
             return None, friction, springs
         from femcheck.fe_device.joint_laws import JointLaws
-        laws = {j: LegJointLaws(tuple(self._law(c, j) for c in self.leg_cases)) for j in ("spherical", "universal")}
+        laws = {j: LegJointLaws(tuple(self._law(c, j) for c in self.leg_cases)) for j in self._measured}
         return JointLaws(**laws), friction, springs
 
     def _point(self, label: str):
