@@ -102,10 +102,10 @@ def test_contact_fe_world_is_not_named_clearance(case):
 
 @pytest.mark.slow
 def test_contact_fe_world_with_pin_play_is_named_clearance(case):
-    """Positive control of the test above: the same device FE with the case's default 10 um pin clearance, which
-    the U joints' contact FE takes up below 0.5 N (its approach starts at 2c), is named ``clearance``, needed beyond
-    friction, Hertz stiffening and the joints' rotation release (measured: gaps 26-56 um at the TCP closed at
-    0.2 N, held-out chi2 gain 5328 against the threshold 78)."""
+    """Positive control of the test above: the same device FE with the U joint's contact-FE law too, whose pins
+    have the case's default 10 um play (taken up below 0.5 N: its approach starts at 2c), is named ``clearance``,
+    needed beyond friction, Hertz stiffening and the joints' rotation release (measured: gaps 26-56 um at the TCP
+    closed at 0.2 N, held-out chi2 gain 5328 against the threshold 78)."""
     d = _fe_world_diagnosis(case, DeviceFEWorld.of(case), seed=12)
     assert "clearance" in {c.id for c in d.causes}, [c.id for c in d.causes]
     assert d.as_json()["clearance_check"]["needed"]
