@@ -1,24 +1,39 @@
 """The physical-worlds bench: its worlds are seeded random modified cases, and its scoring counts what it says."""
 import numpy as np
 
-from femcheck.bench.physical_worlds import ELEMENT, draw_world, score
+from femcheck.bench.physical_worlds import CHANGES, ELEMENT, changed_case, confusion_table, draw_world, leg_cases, score
 
 
 def test_worlds_are_seeded_random_and_physically_changed(case):
     """Same seed, same world; over 40 seeds both one-leg and all-leg changes, singles and pairs of different
-    elements appear; a thinner pin or a softer cable in one leg scales that leg's element up (compliance > 1)."""
-    a, b = draw_world(5, case), draw_world(5, case)
-    assert a["changes"] == b["changes"] and a["data_seed"] == b["data_seed"]
-    worlds = [draw_world(s, case) for s in range(40)]
-    sizes = {len(w["changes"]) for w in worlds}
-    legs = {len(c["legs"]) for w in worlds for c in w["changes"]}
-    assert sizes == {1, 2} and legs == {1, 6}
+    elements appear; every change weakens its element (factor < 1 on a modulus, a section or a radius)."""
+    a, b = draw_world(5), draw_world(5)
+    assert a == b
+    worlds = [draw_world(s) for s in range(40)]
+    assert {len(w["changes"]) for w in worlds} == {1, 2}
+    assert {len(c["legs"]) for w in worlds for c in w["changes"]} == {1, 6}
     for w in worlds:
         els = [c["element"] for c in w["changes"]]
         assert len(set(els)) == len(els) and set(els) <= set(ELEMENT.values())
-        for c in w["changes"]:
-            if len(c["legs"]) == 1:
-                assert c["factor"] > 1.2   # every change softens its element: 1.7-2.2 for the tube, ~2 for the bar
+        assert all(0.4 < c["factor"] < 0.95 for c in w["changes"])
+
+
+def test_a_change_is_written_into_the_case_of_its_legs_only(case):
+    """A tube alloy of its own changes the proximal links' modulus and not the guideways' (both aluminium in the
+    case); each change reaches exactly the legs it names, a pair's two changes meet in a leg they share, and legs
+    alike share one case object (one FE solve of their parts)."""
+    tube = case.with_params(**changed_case(case, "proximal_link_modulus", 0.5))
+    assert tube.proximal_link.material.E_Pa == 0.5 * case.proximal_link.material.E_Pa
+    assert tube.guideway.material.E_Pa == case.guideway.material.E_Pa
+    for name in CHANGES:   # every change moves the case (no silent no-op)
+        assert case.with_params(**changed_case(case, name, 0.8)).sha256 != case.sha256
+    changes = [{"change": "cable_modulus", "factor": 0.6, "legs": [3]},
+               {"change": "guideway_section", "factor": 0.85, "legs": list(range(6))}]
+    legs = leg_cases(case, changes)
+    cable = [c.actuation.cable_modulus_Pa for c in legs]
+    assert cable == [case.actuation.cable_modulus_Pa * (0.6 if i == 3 else 1.0) for i in range(6)]
+    assert all(c.guideway.width_radial_m == case.guideway.width_radial_m * 0.85 for c in legs)
+    assert len({id(c) for c in legs}) == 2
 
 
 def test_scoring_counts_elements_not_ids():
@@ -30,3 +45,15 @@ def test_scoring_counts_elements_not_ids():
     assert not bad["right_element_first"] and not bad["both_named"] and bad["wrong_whole_leg"]
     one = score(changes[:1], [{"id": "actuation_compliance"}, {"id": "guideway_in_legs", "legs": [0, 1]}])
     assert not one["right_element_first"] and one["both_named"] and not one["legs_right"]
+
+
+def test_confusion_table_counts_the_single_changes():
+    """Rows: changed element; columns: first named element; each single world counted once, pairs not at all."""
+    rows = [{"changes": [{"element": "lg"}], "first_element": "lg"},
+            {"changes": [{"element": "lg"}], "first_element": "act"},
+            {"changes": [{"element": "act"}], "first_element": "act"},
+            {"changes": [{"element": "act"}, {"element": "lg"}], "first_element": "lg"}]
+    lines = [[x.strip() for x in ln.split("|")] for ln in confusion_table(rows).splitlines()]
+    assert lines[0][1:] == ["act", "lg"]
+    assert dict((ln[0], ln[1:]) for ln in lines[1:]) == {"act": ["1", "0"], "lg": ["1", "1"]}
+    assert np.sum([int(x) for ln in lines[1:] for x in ln[1:]]) == 3

@@ -1,27 +1,31 @@
 """Bench area ``physical_worlds``: the 6-PSU diagnosis on worlds that differ from the case *physically*.
 
-Each world is a seeded random modified copy of the reference case (``cases/haptic_6psu.toml``), diagnosed against
-the unmodified case. A change is one of
+Each world is a seeded random modified copy of the reference case (``cases/haptic_6psu.toml``), **simulated by the
+device FE** and diagnosed against the unmodified case. A change is one of (:func:`changed_case`, the one place that
+says which case values a change sets):
 
-- ``proximal_link_modulus``: the proximal-link tubes' modulus x U(0.45, 0.6) (their compliance / that factor, an
-  element scale of the chain: the tube's material is the guideways' too in the case file);
-- ``guideway_section``: the guideway bar's width and depth x s, s ~ U(0.82, 0.88) (case parameters: bending and
-  torsion compliance ~ s^-4); in one leg, that leg's guideway compliance x s^-4;
-- ``pin_radius``: the U-joint pin radius x U(0.45, 0.55) (case parameter: pin bending ~ r^-4 and the line contact);
-  in one leg, that leg's U-joint compliance x the all-legs ratio the chain gives for that radius;
-- ``cable_modulus``: the cable modulus x U(0.55, 0.7) (case parameter); in one leg, that leg's actuation compliance
-  x the all-legs ratio,
+- ``proximal_link_modulus``: the proximal-link tubes' alloy, modulus x U(0.45, 0.6) (a material of their own; the
+  guideways and yokes keep the aluminium);
+- ``guideway_section``: the guideway bar's width and depth x U(0.82, 0.88) (bending and torsion ~ s^-4);
+- ``pin_radius``: the U-joint pin radius x one of :data:`PIN_FACTORS` (seeded draw from a grid, so that the
+  U joint's contact FE, minutes of CPU, is measured once per factor and reused; on the coarse joint mesh its
+  contact FE does not converge below x 0.88: a thinner pin bends into the bore outside the candidate band);
+- ``cable_modulus``: the cable modulus x U(0.55, 0.7),
 
 in one random leg or in all six; a world holds one change or two changes of different elements (1/2 each).
 
-**The world is the detailed analytical chain of the modified case**, read by dial gauges
-(:mod:`femcheck.experiment.dial_gauge`: 9 points, +-x +-y +-z, preload 5 N, total 20 N, 3 trials, 3 um scatter,
-10 um steps), not the device FE: a device-FE world with contact joints needs its meshes and contact joint laws
-measured again for every modified case (minutes of CPU per case on the 2-core machine, and the FE reading model
-does not take element scales), so 30 FE worlds do not fit a bench run here. The chain world is built by the
-element formulas of the case, not by the diagnosis's effect code; its limit is that the element laws are the ones
-the diagnosis's element causes scale (a section change is not an exact scale of the guideway's 6x6 compliance, the
-pin radius not of the U joint's).
+**The world** (:class:`femcheck.experiment.device_fe_world.DeviceFEWorld`): the detailed device FE of ``verify``
+(solid guideway and link super-elements, actuation FE, frictional contact joints with contact-FE-measured laws),
+each leg built from its own changed case; read by dial gauges (:mod:`femcheck.experiment.dial_gauge`: 9 points,
++-x +-y +-z, preload 5 N, total 20 N, 3 trials, 3 um scatter, 10 um steps). Solid parts and joints on the
+``coarse`` mesh (``--mesh``); the U joint of a changed pin is measured by its contact FE (cached on disk by its
+inputs), an unchanged joint is the reference's law.
+
+**The model diagnosed** (:class:`femcheck.diagnose.fe_model.FEAnchoredChainModel`): the unmodified case's
+detailed chain plus its idealization gap to the device FE of the *unmodified* case on the same mesh (what a user
+can compute from the case alone): the unchanged world is explained with no cause, and the causes' effects are the
+chain's. The chain's joints are those nearer to that FE (:meth:`~.FEAnchoredChainModel.nearest`: released, as the
+frictional joints slip at the test loads).
 
 Scoring, per world: the element of each named cause (``<element>_in_legs`` its element; ``actuation_compliance``
 the actuation; the whole-device ids their elements: ``link_modulus`` guideway + proximal link,
@@ -32,10 +36,10 @@ the actuation; the whole-device ids their elements: ``link_modulus`` guideway + 
 - ``wrong_whole_leg``: ``leg_softening`` is named;
 - ``legs_right``: the named located cause of the first changed element holds exactly its legs.
 
-Figures: the rates over the worlds (and over singles and pairs), the confusion matrix of the single changes
-{changed element: {first named element: count}}, the pairs {changed elements: {named elements: count}}, each world's
-row, CPU per world. ``python -m femcheck.bench physical_worlds`` (``WORLDS`` worlds,
-seed 2026) or ``python -m femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
+Figures (flat keys): the rates over the worlds (and over singles and pairs), the confusion of the single changes
+(changed element -> first named element) and of the pairs as text, CPU per world; each world's row goes to
+``reports/bench/detail/physical_worlds_worlds.json``. ``python -m femcheck.bench physical_worlds`` (``WORLDS``
+worlds, seed 2026) or ``python -m femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
 """
 from __future__ import annotations
 
@@ -49,10 +53,13 @@ AREA = "physical_worlds"
 WORLDS = 30
 SEED = 2026
 CASE_PATH = "cases/haptic_6psu.toml"
+DETAIL_PATH = "reports/bench/detail/physical_worlds_worlds.json"
 DIRECTIONS = ("+x", "+y", "+z", "-x", "-y", "-z")
 CHANGES = ("proximal_link_modulus", "guideway_section", "pin_radius", "cable_modulus")
 #: the chain element each change moves
 ELEMENT = {"proximal_link_modulus": "prox", "guideway_section": "lg", "pin_radius": "uj", "cable_modulus": "act"}
+#: the pin-radius factors a world draws from
+PIN_FACTORS = (0.88, 0.9)
 #: the elements a named cause moves
 CAUSE_ELEMENTS = {"guideway_in_legs": ("lg",), "actuation_in_legs": ("act",), "spherical_joint_in_legs": ("sp",),
                   "proximal_link_in_legs": ("prox",), "universal_joint_in_legs": ("uj",),
@@ -60,58 +67,57 @@ CAUSE_ELEMENTS = {"guideway_in_legs": ("lg",), "actuation_in_legs": ("act",), "s
                   "joint_contact_compliance": ("sp", "uj"), "leg_softening": ("whole leg",)}
 
 
-def _all_legs_ratio(case, element: str, params: dict) -> float:
-    """Compliance ratio of ``element`` (chain element key) between the case with ``params`` and the case: the
-    factor a one-leg change of that parameter puts on that leg's element (from the chain's element compliances)."""
-    from femcheck.chain import ELEMENTS
-    from femcheck.chain.haptic_6psu_model import chain_element_compliances
-    pose = np.concatenate([case.workspace.nominal_tcp_m, np.zeros(3)])[None]   # P0; element laws barely vary
-    j = ELEMENTS.index(element)
-    a = chain_element_compliances(case, pose)[0, 0, j]
-    b = chain_element_compliances(case.with_params(**params), pose)[0, 0, j]
-    return float(np.linalg.norm(b) / np.linalg.norm(a))   # Frobenius norm of the 6x6 compliance at C
+def changed_case(case, change: str, factor: float) -> dict:
+    """{dotted case key: value} that writes ``change`` with ``factor`` into ``case`` (the only place that knows
+    how a physical change is spelled in the case file)."""
+    if change == "proximal_link_modulus":   # a tube alloy of its own: the guideways and yokes keep the aluminium
+        m = case.proximal_link.material
+        return {"materials.tube_alloy.E_Pa": m.E_Pa * factor, "materials.tube_alloy.nu": m.nu,
+                "materials.tube_alloy.density_kg_m3": m.density_kg_m3, "proximal_link.material": "tube_alloy"}
+    if change == "guideway_section":
+        return {"guideway.width_radial_m": case.guideway.width_radial_m * factor,
+                "guideway.depth_tangential_m": case.guideway.depth_tangential_m * factor}
+    if change == "pin_radius":
+        return {"universal_joint.pin_radius_m": case.universal_joint.pin_radius_m * factor}
+    if change == "cable_modulus":
+        return {"actuation.cable_modulus_Pa": case.actuation.cable_modulus_Pa * factor}
+    raise ValueError(f"unknown change {change!r}; expected one of {', '.join(CHANGES)}")
 
 
-def draw_change(rng, case, name: str, leg: int | None) -> tuple[dict, dict]:
-    """(dial-gauge world entries, truth) of one change ``name`` in ``leg`` (None = all legs)."""
-    el = ELEMENT[name]
-    if name == "proximal_link_modulus":
-        f = 1.0 / float(rng.uniform(0.45, 0.6))
-        factor = np.ones(6) * f if leg is None else np.where(np.arange(6) == leg, f, 1.0)
-        return {"element_scale": {el: factor}}, {"factor": f}
-    if name == "guideway_section":
-        s = float(rng.uniform(0.82, 0.88))
-        params = {"guideway.width_radial_m": case.guideway.width_radial_m * s,
-                  "guideway.depth_tangential_m": case.guideway.depth_tangential_m * s}
-        truth = {"section_factor": s}
-    elif name == "pin_radius":
-        s = float(rng.uniform(0.45, 0.55))
-        params = {"universal_joint.pin_radius_m": case.universal_joint.pin_radius_m * s}
-        truth = {"radius_factor": s}
-    else:
-        s = float(rng.uniform(0.55, 0.7))
-        params = {"actuation.cable_modulus_Pa": case.actuation.cable_modulus_Pa * s}
-        truth = {"modulus_factor": s}
-    if leg is None:
-        return {"case_params": params}, truth
-    f = _all_legs_ratio(case, el, params)
-    return {"element_scale": {el: np.where(np.arange(6) == leg, f, 1.0)}}, {**truth, "factor": f}
+def draw_factor(rng, change: str) -> float:
+    """The seeded magnitude of ``change`` (module doc)."""
+    if change == "pin_radius":
+        return float(PIN_FACTORS[int(rng.integers(len(PIN_FACTORS)))])
+    lo, hi = {"proximal_link_modulus": (0.45, 0.6), "guideway_section": (0.82, 0.88),
+              "cable_modulus": (0.55, 0.7)}[change]
+    return float(rng.uniform(lo, hi))
 
 
-def draw_world(seed: int, case) -> dict:
+def draw_world(seed: int) -> dict:
     """A random world: one or two changes of different elements, each in one leg or all (seeded)."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 3))
     names = [CHANGES[i] for i in rng.choice(len(CHANGES), size=n, replace=False)]
-    world, changes = {}, []
+    changes = []
     for name in names:
         leg = None if rng.uniform() < 0.5 else int(rng.integers(6))
-        part, truth = draw_change(rng, case, name, leg)
-        for key, v in part.items():   # merge: two changes never touch the same element or parameter
-            world.setdefault(key, {}).update(v)
-        changes.append({"change": name, "element": ELEMENT[name], "legs": list(range(6)) if leg is None else [leg],
-                        **truth})
-    return {"seed": seed, "world": world, "changes": changes, "data_seed": int(rng.integers(1 << 30))}
+        changes.append({"change": name, "element": ELEMENT[name], "factor": draw_factor(rng, name),
+                        "legs": list(range(6)) if leg is None else [leg]})
+    return {"seed": seed, "changes": changes, "data_seed": int(rng.integers(1 << 30))}
+
+
+def leg_cases(case, changes: list) -> tuple:
+    """(6,) the case of each leg: the reference with the changes that reach that leg (legs alike share one)."""
+    per_leg = [{} for _ in range(6)]
+    for c in changes:
+        for leg in c["legs"]:
+            per_leg[leg].update(changed_case(case, c["change"], c["factor"]))
+    built: dict = {}
+    for p in per_leg:
+        key = repr(sorted(p.items()))
+        if key not in built:
+            built[key] = case.with_params(**p) if p else case
+    return tuple(built[repr(sorted(p.items()))] for p in per_leg)
 
 
 def score(changes: list, causes: list) -> dict:
@@ -131,20 +137,49 @@ def score(changes: list, causes: list) -> dict:
             "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right)}
 
 
-def run_world(seed: int) -> dict:
+_ANCHORS: dict = {}
+
+
+def run_world(seed: int, mesh: str = "coarse") -> dict:
     import femcheck
-    from femcheck.diagnose import AnalyticalChainModel, diagnose
+    from femcheck.diagnose import diagnose
+    from femcheck.diagnose.fe_model import FEAnchoredChainModel
+    from femcheck.experiment.device_fe_world import DeviceFEWorld
     from femcheck.experiment.dial_gauge import dial_campaign
     from femcheck.measured import process
     case = femcheck.load_case(CASE_PATH)
-    w = draw_world(seed, case)
+    w = draw_world(seed)
     t0 = time.process_time()
-    readings = process(dial_campaign(case, w["world"], seed=w["data_seed"], directions=DIRECTIONS).data, case)
-    d = diagnose(AnalyticalChainModel(case, "detailed", "rigid"), readings, with_baseline=False).as_json()
-    row = {"seed": seed, "changes": w["changes"], "verdict": d["verdict"],
+    world = DeviceFEWorld(case, leg_cases(case, w["changes"]), mesh=mesh)
+    readings = process(dial_campaign(case, {"device": world}, seed=w["data_seed"], directions=DIRECTIONS).data, case)
+    t1 = time.process_time()
+    if mesh not in _ANCHORS:   # the unmodified case's: one per process, its gap table is shared by the worlds
+        tot = readings.total_state
+        _ANCHORS[mesh] = FEAnchoredChainModel.nearest(case, DeviceFEWorld.of(case, mesh=mesh), readings.pose[tot],
+                                                      readings.force[tot])
+    model = _ANCHORS[mesh]
+    d = diagnose(model, readings, with_baseline=False).as_json()
+    row = {"seed": seed, "changes": w["changes"], "verdict": d["verdict"], "chain_joints": model.joints,
            "causes": [{"id": c["id"], "legs": c.get("legs", []), "probability": c["probability"]} for c in d["causes"]],
-           **score(w["changes"], d["causes"]), "cpu_s": round(time.process_time() - t0, 2)}
+           **score(w["changes"], d["causes"]), "world_cpu_s": round(t1 - t0, 2),
+           "cpu_s": round(time.process_time() - t0, 2)}
     return row
+
+
+def _short(changes: list) -> str:
+    return " + ".join(f"{c['element']}[{'all' if len(c['legs']) == 6 else c['legs'][0]}]" for c in changes)
+
+
+def confusion_table(rows: list) -> str:
+    """The single changes as a text table: changed element (row) x first named element (column), counts."""
+    singles = [r for r in rows if len(r["changes"]) == 1]
+    changed = sorted({r["changes"][0]["element"] for r in singles})
+    named = sorted({r["first_element"] for r in singles})
+    head = ["changed \\ first named"] + named
+    body = [[c] + [str(sum(1 for r in singles if r["changes"][0]["element"] == c and r["first_element"] == n))
+                   for n in named] for c in changed]
+    width = [max(len(x[k]) for x in [head] + body) for k in range(len(head))]
+    return "\n".join(" | ".join(x[k].ljust(width[k]) for k in range(len(head))) for x in [head] + body)
 
 
 def summarize(rows: list) -> dict:
@@ -153,34 +188,69 @@ def summarize(rows: list) -> dict:
     rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
     confusion, named_pairs = {}, {}
     for r in singles:
-        row = confusion.setdefault(r["changes"][0]["element"], {})
-        row[r["first_element"]] = row.get(r["first_element"], 0) + 1
+        key = f"{r['changes'][0]['element']}>{r['first_element']}"
+        confusion[key] = confusion.get(key, 0) + 1
     for r in pairs:   # changed elements -> the elements named (each cause's, in order)
-        key = "+".join(sorted(c["element"] for c in r["changes"]))
         got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
-        row = named_pairs.setdefault(key, {})
-        row[got] = row.get(got, 0) + 1
+        key = f"{'+'.join(sorted(c['element'] for c in r['changes']))}>{got}"
+        named_pairs[key] = named_pairs.get(key, 0) + 1
+    count = lambda rs, k: int(sum(r[k] for r in rs))
+    median = lambda k: round(float(np.median([r[k] for r in rows])), 2) if rows else None
     return {"worlds": len(rows), "singles": len(singles), "pairs": len(pairs),
             "right_element_first_rate": rate(rows, "right_element_first"),
+            "right_element_first_count": count(rows, "right_element_first"),
             "right_element_first_rate_singles": rate(singles, "right_element_first"),
             "right_element_first_rate_pairs": rate(pairs, "right_element_first"),
-            "both_named_rate_pairs": rate(pairs, "both_named"),
-            "wrong_whole_leg_rate": rate(rows, "wrong_whole_leg"),
+            "both_named_rate_pairs": rate(pairs, "both_named"), "both_named_count_pairs": count(pairs, "both_named"),
+            "wrong_whole_leg_rate": rate(rows, "wrong_whole_leg"), "wrong_whole_leg_count": count(rows, "wrong_whole_leg"),
             "legs_right_rate": rate(rows, "legs_right"),
             "explained_rate": rate([{"x": r["verdict"] == "explained"} for r in rows], "x"),
-            "cpu_per_world_s_median": round(float(np.median([r["cpu_s"] for r in rows])), 2) if rows else None,
-            "world": "detailed analytical chain of the modified case (not the device FE; module docstring)",
-            "confusion_singles_changed_vs_first_named": confusion, "pairs_changed_vs_named": named_pairs,
+            "cpu_per_world_s_median": median("cpu_s"), "world_fe_cpu_s_median": median("world_cpu_s"),
+            "world": "device FE of the modified case (solid parts, actuation FE, frictional contact joints with "
+                     "contact-FE laws), leg by leg",
+            "model": "chain of the unmodified case + its idealization gap to the device FE of the unmodified case",
+            "confusion_singles_changed_to_first_named": ", ".join(f"{k} {v}" for k, v in sorted(confusion.items())),
+            "pairs_changed_to_named": ", ".join(f"{k} {v}" for k, v in sorted(named_pairs.items())),
             "rows": rows}
 
 
-def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1) -> dict:
+def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
+        detail: str = DETAIL_PATH) -> dict:
+    """The flat figures of ``n_worlds`` worlds from ``seed``; each world's row is printed as it comes and the rows
+    so far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
     from concurrent.futures import ProcessPoolExecutor
+    from functools import partial
+    from femcheck.report.atomic import write_text_atomic
     seeds = range(seed, seed + n_worlds)
+    one = partial(run_world, mesh=mesh)
+    rows: list = []
+
+    def keep(row, done: bool = False):
+        if row is not None:
+            rows.append(row)
+            print(_line(row), flush=True)
+        write_text_atomic(detail, json.dumps({"complete": done, "worlds": rows}, indent=2) + "\n")
     if jobs <= 1:
-        return summarize([run_world(s) for s in seeds])
-    with ProcessPoolExecutor(jobs) as ex:   # one world per process: each diagnosis is single-threaded
-        return summarize(list(ex.map(run_world, seeds)))
+        for s in seeds:
+            keep(one(s))
+    else:
+        with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
+            for row in ex.map(one, seeds):
+                keep(row)
+    keep(None, done=True)
+    fig = summarize(rows)
+    fig.pop("rows")
+    return {**fig, "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
+
+
+def table(figures: dict) -> str:
+    """The confusion table of the single changes, from the rows the run kept (``make bench``'s summary)."""
+    return confusion_table(json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"])
+
+
+def _line(r: dict) -> str:
+    return (f"seed {r['seed']}: {_short(r['changes'])} -> {', '.join(r['named']) or 'none'} ({r['verdict']}, "
+            f"{r['cpu_s']} s CPU)")
 
 
 def main(argv=None) -> int:
@@ -188,16 +258,21 @@ def main(argv=None) -> int:
     ap.add_argument("--worlds", type=int, default=WORLDS)
     ap.add_argument("--seed", type=int, default=SEED)
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--mesh", choices=("coarse", "default"), default="coarse",
+                    help="mesh of the device FE's solid parts and joint contact FE (world and anchor alike)")
     ap.add_argument("--out", default="reports/bench/physical_worlds.json")
+    ap.add_argument("--detail", default=DETAIL_PATH, help="each world's row (JSON)")
     a = ap.parse_args(argv)
     from femcheck.bench.__main__ import machine
     from femcheck.report.atomic import write_text_atomic
     t0 = time.perf_counter()
-    fig = run(a.worlds, a.seed, a.jobs)
-    fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig,
-           "command": f"python -m femcheck.bench.physical_worlds --worlds {a.worlds} --seed {a.seed} --jobs {a.jobs}"}
+    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail)
+    command = (f"python -m femcheck.bench.physical_worlds --worlds {a.worlds} --seed {a.seed} --jobs {a.jobs}"
+               f" --mesh {a.mesh}")
+    fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig, "command": command}
     write_text_atomic(a.out, json.dumps(fig, indent=2) + "\n")
-    print(json.dumps({k: v for k, v in fig.items() if k != "rows"}, indent=2))
+    print(json.dumps(fig, indent=2))
+    print(table(fig))
     return 0
 
 

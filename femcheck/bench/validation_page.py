@@ -55,7 +55,8 @@ AREA_TEXT = {
                        "throughput of the compiled and numpy paths.",
     "physical_worlds": "The diagnosis of the reference device against physically modified copies of its case "
                        "(material, section, pin radius, cable modulus; one leg or all; singles and pairs; the "
-                       "modified case's detailed chain is the world): element confusion and the rates of right answers.",
+                       "world is the device FE of the modified case, coarse mesh): element confusion and the rates "
+                       "of right answers.",
     "serial_diagnose": "The self-weight diagnosis of serial robots: wall time on a 19-joint tree and the rates of right "
                        "answers on generated robots.",
     "solvers": "Every available sparse direct solver on three of femcheck's own systems: time and residual, each as a "

@@ -16,6 +16,8 @@ device model instead:
   leg}): an element's compliance multiplied in the chain model, e.g. the proximal links' for a tube of half the
   modulus (a cantilever's compliance is 1/E, and 1/G at a fixed Poisson ratio);
 - **sensor misalignment**: the dial frame is rotated by a rotation vector (``scipy.spatial.transform.Rotation``);
+- **another device** (``device``): the translations come from that world instead of the chain, e.g. the device FE
+  of a changed case (:mod:`femcheck.experiment.device_fe_world`); friction and the sensor frame still apply;
 - **friction**: Coulomb friction F_f at the TCP acting along the load direction: the force that deflects the device
   on loading is |F| - F_f; on unloading the device sticks at its peak deflection until the load has dropped by
   2 F_f (a stick band of width 2 F_f around the loading curve), then follows |F| + F_f.
@@ -95,9 +97,15 @@ def _world(case, rows, poses, causes: dict, joints: str) -> np.ndarray:
     point, direction, trial, phase, load, force = rows
     f = _deflecting_force(force, load, phase, point, direction, trial, causes.get("friction", 0.0))
     leg = causes.get("weak_guideway_leg")
+    if causes.get("device") is not None:   # a world of its own (e.g. a device FE), not the chain of the case
+        return _rotated(causes["device"].tcp_displacement(poses, f), causes)
     d = _true_translation(case, poses, f, modulus=causes.get("link_modulus", 1.0), guideway_leg=leg,
                           guideway=causes.get("weak_guideway", 1.0), joints=joints,
                           case_params=causes.get("case_params"), element_scale=causes.get("element_scale"))
+    return _rotated(d, causes)
+
+
+def _rotated(d, causes: dict) -> np.ndarray:
     theta = causes.get("sensor_misalignment")
     if theta is not None:
         d = d @ Rotation.from_rotvec(np.asarray(theta, float)).as_matrix().T
@@ -143,7 +151,9 @@ def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = N
 
     ``causes``: {"link_modulus": E_true / E_case, "weak_guideway": compliance factor, "weak_guideway_leg": leg index,
     "sensor_misalignment": (3,) rotation vector rad, "friction": N, "case_params": {case key: value},
-    "element_scale": {element: factor or (6,) factors}} (the last two are not rescaled by ``snr``). ``snr``: a number (or {cause: number}) that
+    "element_scale": {element: factor or (6,) factors}, "device": a world with ``tcp_displacement(pose, force)``
+    that replaces the chain, e.g. :class:`femcheck.experiment.device_fe_world.DeviceFEWorld`} (the last three are
+    not rescaled by ``snr``). ``snr``: a number (or {cause: number}) that
     rescales each named cause to that signal-to-noise ratio (the sensor rotation keeps its axis). Seeded."""
     rng = np.random.default_rng(seed)
     rows = protocol_rows(case, directions, trials, sweep)
@@ -165,5 +175,5 @@ def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = N
                                meta={"case": case.meta.name, "case_sha256": case.sha256, "source": "dial campaign"})
     truth = {k: (np.asarray(v, float).tolist() if k == "sensor_misalignment" else
                  {e: np.asarray(f, float).tolist() for e, f in v.items()} if k == "element_scale" else v)
-             for k, v in causes.items()}
+             for k, v in causes.items() if k != "device"}
     return DialCampaign(data=parse_measured_csv(text, "<dial campaign>"), truth=truth)
