@@ -15,6 +15,7 @@ writes the legs of a layout (a case variant that changes a table: :func:`femchec
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 from dataclasses import dataclass
@@ -284,7 +285,7 @@ def with_layout_params(case, raw: dict, dotted: dict) -> dict:
     layout = psu_layout(case) if mine else None
     if layout is None:
         return dotted
-    from femcheck.case.schema import Context, build_section
+    from femcheck.case.schema import Context, build_materials, build_section
     from femcheck.errors import CaseError
     tables = {t: _table(getattr(layout, t)) for t in TABLES}
     for key, value in mine.items():
@@ -292,7 +293,13 @@ def with_layout_params(case, raw: dict, dotted: dict) -> dict:
         if name not in tables[t]:
             raise CaseError(case.source, key, f"unknown key; expected one of {sorted(tables[t])}")
         tables[t][name] = value
-    ctx = Context(case.source, {m.name: m for m in case.materials})
+    # materials written in the same call (a tube alloy of its own) are known to the tables that name them
+    materials = copy.deepcopy(raw.get("materials", {}))
+    for key, value in dotted.items():
+        parts = key.split(".")
+        if len(parts) == 3 and parts[0] == "materials":
+            materials.setdefault(parts[1], {})[parts[2]] = value
+    ctx = Context(case.source, build_materials(Context(case.source), materials))
     for t, cls in zip(TABLES, (Geometry, Guideway, ProximalLink, SphericalJoint, UniversalJoint, Actuation)):
         build_section(ctx, t, cls, tables[t])              # validate the changed tables (errors name the key)
     from femcheck.kinematics.frames import matrix_to_rotvec, rpy_deg_to_matrix
