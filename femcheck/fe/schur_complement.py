@@ -146,6 +146,8 @@ def condense(K, r: np.ndarray, *, method: str = "auto") -> SchurCondensation:
 def _pardiso_schur(K, r):
     import pypardiso
 
+    from femcheck.fe.linear_solver import pardiso_available
+    pardiso_available()   # records MKL's path once: a new solver does not search the environment for it
     n, ns = K.shape[0], r.size
     solver = pypardiso.PyPardisoSolver(mtype=-2)  # real symmetric indefinite: S may be singular
     A = sp.triu(K, format="csr")

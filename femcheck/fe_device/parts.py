@@ -40,7 +40,7 @@ class SuperElement:
     ref_points (m, 3) m; dofs: unknowns of the FE model before condensation; mesh_s / assembly_s /
     solve_s: wall time of meshing, assembly and factorization + condensation (s); vertices (nv, 3) m and
     tets (nt, 4) of the linear mesh (empty for beams); recovery (3 nv, 6m): vertex displacements
-    u = recovery @ u_ref (m); n_tets; solver: linear solver used.
+    u = recovery @ u_ref (m); n_tets; solver: linear solver used; cached: read from the result cache.
     """
 
     name: str
@@ -55,6 +55,7 @@ class SuperElement:
     tets: np.ndarray
     recovery: np.ndarray
     solver: str = ""
+    cached: bool = False
 
     @property
     def n_tets(self) -> int:
@@ -70,7 +71,30 @@ def condense_solid(part_mesh, E, nu, clamps: tuple[str, ...], couplings: dict[st
 
     clamps: region names fixed to zero; couplings: region name -> reference point (3,) m (RBE2, one
     6-DOF node each, in the given order). E (Pa), nu: the part's material.
+
+    The result is cached on disk (:mod:`femcheck.fe.result_cache`), keyed by the mesh's own key (its part
+    parameters and the meshing code), the material, the clamps, the couplings and the FE code: a second run
+    of the same part reads it (``solve_s`` is then the read time, ``assembly_s`` 0, ``cached`` True).
     """
+    from femcheck.fe import result_cache
+    key = None
+    if part_mesh.cache_key:
+        key = result_cache.result_key("superelement", {
+            "mesh": part_mesh.cache_key, "E_Pa": np.asarray(E, float).tolist(), "nu": np.asarray(nu, float).tolist(), "clamps": list(clamps), "name": name,
+            "couplings": {k: [float(x) for x in v] for k, v in couplings.items()}})
+        t0 = time.perf_counter()
+        hit = result_cache.load("superelement", key)
+        if hit is not None:
+            log.info("%s: super-element read from the cache", name)
+            return dataclasses.replace(hit, mesh_s=mesh_s, assembly_s=0.0, solve_s=time.perf_counter() - t0,
+                                       cached=True)
+    se = _condense_solid(part_mesh, E, nu, clamps, couplings, name, mesh_s)
+    if key is not None:
+        result_cache.store("superelement", key, se)
+    return se
+
+
+def _condense_solid(part_mesh, E, nu, clamps, couplings, name, mesh_s) -> SuperElement:
     from femcheck.fe import constraints as cs
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
     from femcheck.fe.linear_solver import factorize

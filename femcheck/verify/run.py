@@ -236,7 +236,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         from femcheck.fe_device.joint_check import check_joint
         from femcheck.fe_device.joint_fe import JOINTS as JOINT_TYPES
         tc = time.perf_counter()
-        joint_results = [check_joint(case, j, joint_mesh, "P0") for j in JOINT_TYPES]
+        joint_results = [check_joint(case, j, joint_mesh, "P0", use_cache=True) for j in JOINT_TYPES]
         t_joints = time.perf_counter() - tc
     if levels:
         from femcheck.verify.fe import run_fe
