@@ -55,6 +55,11 @@ def _path(kind: str, key: str) -> Path:
     return cache_dir() / kind / f"{key}.pkl"
 
 
+def has(kind: str, key: str) -> bool:
+    """Whether an entry exists (for predicting a run's cost; :func:`load` still decides whether it is readable)."""
+    return enabled() and _path(kind, key).is_file()
+
+
 def load(kind: str, key: str):
     """The stored result or None (absent, unreadable, or the cache turned off)."""
     if not enabled():

@@ -86,9 +86,7 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
     from femcheck.fe_device import joint_fe as jf
 
     loads = joint_loads(case, point)
-    key = result_cache.result_key("joint_check", {
-        "joint": joint, "mesh": mesh, "loads_N": list(loads), "spherical_joint": repr(case.spherical_joint),
-        "universal_joint": repr(case.universal_joint), "solid": repr(case.solid)})
+    key = joint_table_key(case, joint, mesh, point)
     fe_part = result_cache.load("joint_check", key) if use_cache else None
     if fe_part is None:
         fe_part = _joint_fe(case, joint, mesh, loads, progress)
@@ -102,11 +100,22 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
             "error_pct": jf.error_pct(np.asarray(fe_part["fe_component_compliance"], float), an)}
 
 
+def joint_table_key(case, joint: str, mesh: str, point: str = "P0") -> str:
+    """Result-cache key of :func:`check_joint`'s contact FE: the joint's case sections, its loads at ``point``, the
+    mesh level (and the FE code, :func:`femcheck.fe.result_cache.result_key`)."""
+    from femcheck.fe import result_cache
+    return result_cache.result_key("joint_check", {
+        "joint": joint, "mesh": mesh, "loads_N": list(joint_loads(case, point)),
+        "spherical_joint": repr(case.spherical_joint), "universal_joint": repr(case.universal_joint),
+        "solid": repr(case.solid)})
+
+
 def _joint_fe(case, joint: str, mesh: str, loads, progress=None) -> dict:
     """The contact-FE part of :func:`check_joint` (everything but the analytical column)."""
     from femcheck.fe_device import joint_fe as jf
 
-    model = jf.build_joint(case, joint, mesh, max_load_N=max(loads))
+    from femcheck.fe_device.joint_models import condensed_joint
+    model = condensed_joint(case, joint, mesh, max_load_N=max(loads))
     if progress:
         progress(f"{joint}: mesh and condensation")
     tol, start = jf.contact_start(case, joint, loads)

@@ -1,0 +1,120 @@
+"""The steps of a verification run and what each is expected to cost, for the progress bar's ETA.
+
+A run reports a step after each of: the ball tilt contact FE (frictionless, with friction), the joint laws
+(spherical, universal), the joint table (build and solve of each joint), the device FE (the link and six
+guideways per point, in any order when ``--jobs`` > 1), the tables, plots and VTU, the diagnosis of the contact
+FE, the coverage, each mesh of the convergence study and the report files. :class:`VerifyWork` gives each reported step its expected
+cost (:data:`COLD_S`; ``CACHED_SHARE`` of it for a step read from the result caches), so the ETA counts work,
+not steps (:class:`femcheck.cli._progress.StageProgress`); tests/test_progress.py keeps it within 3x of the time
+left after the first tenth of the work on the stage costs measured on cold and warm runs.
+
+Cache state is predicted before the run: the tilt study, the joint laws and the joint table from their cache
+entries; the device FE's super-elements are taken as cached when the joint table is (the same earlier run
+wrote both; a run whose meshes changed but whose joints did not gets an ETA that is low at first).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+#: expected wall time (s) per reported step, cold caches, ``--jobs 2``: shares of the stage times of
+#: ``make verify`` (manifest.json timings_s of a default-mesh run on the 2-core machine: device FE 202 s for the
+#: link and 54 guideways, convergence 312 s of which the fine mesh ~300 s, joint laws 119 s, joint table 77 s,
+#: contact diagnosis 191 s, coverage 24 s, tables, plots and VTU 24 s, all at load average 10; the tilt study condensed:
+#: 11 s per solve at load 7). Only the ratios matter.
+COLD_S = {
+    "tilt": 11.0,
+    "law:spherical": 40.0, "law:universal": 79.0,
+    # the table re-meshes the ball (graded on the point's load) and reuses the universal joint's condensed model
+    "table:spherical:build": 30.0, "table:spherical:solve": 3.0,
+    "table:universal:build": 2.0, "table:universal:solve": 4.0,
+    "link:coarse": 2.0, "guideway:coarse": 0.5,
+    "link:default": 10.0, "guideway:default": 3.5,
+    "link:fine": 80.0, "guideway:fine": 38.0,
+    "figures": 24.0, "diagnosis": 191.0, "coverage": 24.0, "report": 2.0,
+}
+#: a step read from a cache costs this share of its cold time (a pickle or npz read; the analytical column)
+CACHED_SHARE = 0.02
+
+
+@dataclasses.dataclass
+class VerifyWork:
+    """Reported step -> expected cost. ``phases``: (name, steps, cost of each step as a function of its
+    description) in the order the run reports them; ``weights``: one per step (their sum is the total work)."""
+
+    phases: list
+
+    @property
+    def weights(self) -> list[float]:
+        out = []
+        for name, n, cost in self.phases:
+            if name.startswith("fe:"):   # link first, then the guideways (any order: costs come from descriptions)
+                out += [cost("link")] + [cost("guideway")] * (n - 1)
+            else:
+                out += [cost(None)] * n
+        return out
+
+    def __post_init__(self):
+        self._seen = 0
+
+    def __call__(self, description: str) -> float:
+        """The expected cost of the step just reported (by its place in the run and its description)."""
+        k = self._seen
+        self._seen += 1
+        for _name, n, cost in self.phases:
+            if k < n:
+                return cost(description)
+            k -= n
+        return 0.0
+
+
+def _const(v: float):
+    return lambda desc: v
+
+
+def plan(case, points, levels, mesh: str, joint_fe: bool, joint_mesh: str, convergence_point) -> VerifyWork:
+    """The steps of ``run_verify`` with these options (module doc)."""
+    from femcheck.fe_device.joint_laws import cached as laws_cached
+    from femcheck.verify.contact_joints import tilt_cached
+
+    n_points = len(points)
+    detailed = "detailed" in levels
+    contact = bool(joint_fe and detailed)
+    phases = []
+    warm_fe = False
+    if contact:
+        tilt_hit = tilt_cached(case)
+        laws_hit = laws_cached(case, joint_mesh)
+        table_hit = joint_table_cached(case, joint_mesh)
+        warm_fe = all(table_hit.values())
+        phases.append(("tilt", 2, _const(COLD_S["tilt"] * (CACHED_SHARE if tilt_hit else 1.0))))
+        for j in ("spherical", "universal"):
+            phases.append((f"law:{j}", 1, _const(COLD_S[f"law:{j}"] * (CACHED_SHARE if laws_hit[j] else 1.0))))
+        for j in ("spherical", "universal"):
+            share = CACHED_SHARE if table_hit[j] else 1.0
+            phases.append((f"table:{j}", 1, _const(COLD_S[f"table:{j}:build"] * share)))
+            phases.append((f"table:{j}", 1, _const(COLD_S[f"table:{j}:solve"] * share)))
+    if levels:
+        fe_share = CACHED_SHARE * 5 if warm_fe else 1.0   # a super-element read: mesh and pickle, no solve
+
+        def fe_cost(m):
+            return lambda desc: fe_share * COLD_S[("link:" if desc == "link" else "guideway:") + m]
+        phases.append((f"fe:{mesh}", 1 + 6 * n_points, fe_cost(mesh)))
+        phases.append(("figures", 1, _const(COLD_S["figures"])))
+        if contact and n_points == 9:
+            phases.append(("diagnosis", 1, _const(COLD_S["diagnosis"])))
+        if contact:
+            phases.append(("coverage", 1, _const(COLD_S["coverage"])))
+        if convergence_point:
+            for m in ("coarse", "default", "fine"):
+                if m == mesh and convergence_point in points:
+                    continue   # the run's own FE at this mesh is reused
+                phases.append((f"fe:{m}", 7, fe_cost(m)))
+    phases.append(("report", 1, _const(COLD_S["report"])))
+    return VerifyWork(phases)
+
+
+def joint_table_cached(case, joint_mesh: str) -> dict[str, bool]:
+    """{joint: whether its joint-table contact FE is in the result cache}."""
+    from femcheck.fe import result_cache
+    from femcheck.fe_device.joint_check import joint_table_key
+    return {j: result_cache.has("joint_check", joint_table_key(case, j, joint_mesh, "P0")) for j in ("spherical", "universal")}
