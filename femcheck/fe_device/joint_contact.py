@@ -199,8 +199,8 @@ def spherical_joint_tilt(case, normal_force_N: float, rotation_rad: float, *, fr
                            np.array(slip), int(con.nfree), int(sum(res.iterations_per_step)), time.perf_counter() - t0)
 
 
-#: ball-in-seat tilt: contact points whose initial gap is below this many Hertz approaches at the full load are
-#: kept in the condensed contact iterations (the gap grows as r² / (2 R*) and the patch edge a has g0 = δ_H / 2,
+#: ball-in-seat tilt: contact points whose initial gap is within this many Hertz approaches at the full load of the
+#: smallest gap are kept in the condensed contact iterations (the gap grows as r² / (2 R*) and the patch edge a has g0 = δ_H / 2,
 #: so 2 δ_H keeps r ≤ 2 a); every dropped point is checked to stay open after the solve
 TILT_BAND = 2.0
 
@@ -240,7 +240,8 @@ def _tilt_condensed(case, m: _BallSeatModel, normal_force_N: float, rotation_rad
     Bn_q, Bt_q = sp.csr_matrix(pair.B_n @ T), sp.csr_matrix(pair.B_t @ T)
     dh_max = float(hertz_approach(float(normal_force_N), m.E_star, m.R_star))
     chord = max(-float(pair.g0.min()), 0.0)
-    keep = pair.g0 <= TILT_BAND * dh_max + 2.0 * chord
+    # measured from the first point to touch (a coarse facet mesh may start with every gap open)
+    keep = pair.g0 <= max(float(pair.g0.min()), 0.0) + TILT_BAND * dh_max + 2.0 * chord
     rows_t = np.flatnonzero(np.repeat(keep, 2))
     col_of_ref = {int(d): int(np.flatnonzero(C.free == d)[0]) for d in m.ref}  # B's DOFs are free in K_q
     ref_q = np.array([col_of_ref[int(d)] for d in m.ref])

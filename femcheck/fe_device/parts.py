@@ -86,9 +86,7 @@ def cached_superelement(mesh_key: str, E, nu, clamps, couplings: dict, name: str
     from femcheck.fe import result_cache
     key = None
     if mesh_key:
-        key = result_cache.result_key("superelement", {
-            "mesh": mesh_key, "E_Pa": np.asarray(E, float).tolist(), "nu": np.asarray(nu, float).tolist(),
-            "clamps": list(clamps), "name": name, "couplings": {k: [float(x) for x in v] for k, v in couplings.items()}})
+        key = _superelement_key(mesh_key, E, nu, clamps, couplings, name)
         t0 = time.perf_counter()
         hit = result_cache.load("superelement", key)
         if hit is not None:
@@ -99,6 +97,13 @@ def cached_superelement(mesh_key: str, E, nu, clamps, couplings: dict, name: str
     if key is not None:
         result_cache.store("superelement", key, se)
     return se
+
+
+def _superelement_key(mesh_key: str, E, nu, clamps, couplings: dict, name: str) -> str:
+    from femcheck.fe import result_cache
+    return result_cache.result_key("superelement", {
+        "mesh": mesh_key, "E_Pa": np.asarray(E, float).tolist(), "nu": np.asarray(nu, float).tolist(),
+        "clamps": list(clamps), "name": name, "couplings": {k: [float(x) for x in v] for k, v in couplings.items()}})
 
 
 def _condense_solid(part_mesh, E, nu, clamps, couplings, name, mesh_s) -> SuperElement:
@@ -186,6 +191,24 @@ def link_element(case, kind: str = "solid", size_m: float | None = None) -> Supe
                                pl.material.E_Pa, pl.material.nu, (),
                                {"prox_end_B": np.zeros(3), "prox_end_C": np.array([0.0, 0.0, L2])}, "proximal_link",
                                lambda: _timed(lambda: proximal_link.build(case, size_m)))
+
+
+def superelement_cached(case, part: str, size_m: float, length_m: float | None = None) -> bool:
+    """Whether the solid super-element of ``part`` ("guideway" of cantilever ``length_m``, or "link") at mesh size
+    ``size_m`` is in the result cache (a read then takes milliseconds: no worker process is worth starting for it)."""
+    from femcheck.fe import result_cache
+    from geometry import guideway, proximal_link
+    from geometry.cache import cache_key
+    if part == "guideway":
+        g = case.guideway
+        mesh_key = cache_key(guideway.PART, guideway.parameters(case, size_m, length_m=length_m))
+        return result_cache.has("superelement", _superelement_key(mesh_key, g.material.E_Pa, g.material.nu, ("lg_clamp",),
+                                                                  {"lg_slider": np.array([0.0, 0.0, length_m])}, "guideway"))
+    pl, L2 = case.proximal_link, case.geometry.proximal_link_length_m
+    mesh_key = cache_key(proximal_link.PART, proximal_link.parameters(case, size_m))
+    return result_cache.has("superelement", _superelement_key(
+        mesh_key, pl.material.E_Pa, pl.material.nu, (), {"prox_end_B": np.zeros(3), "prox_end_C": np.array([0.0, 0.0, L2])},
+        "proximal_link"))
 
 
 def _timed(build):

@@ -30,7 +30,9 @@ COLD_S = {
     "link:coarse": 2.0, "guideway:coarse": 0.5,
     "link:default": 10.0, "guideway:default": 3.5,
     "link:fine": 80.0, "guideway:fine": 38.0,
-    "figures": 24.0, "diagnosis": 191.0, "coverage": 24.0, "report": 2.0,
+    # tables, plots, VTU and PNGs of the first point: per mesh level (coarse: 5.7 s of a P0, P5 run at load 9)
+    "figures:coarse": 6.0, "figures:default": 24.0, "figures:fine": 60.0,
+    "diagnosis": 191.0, "coverage:per_point": 2.6, "report": 2.0,
 }
 #: a step read from a cache costs this share of its cold time (a pickle or npz read; the analytical column)
 CACHED_SHARE = 0.02
@@ -99,11 +101,11 @@ def plan(case, points, levels, mesh: str, joint_fe: bool, joint_mesh: str, conve
         def fe_cost(m):
             return lambda desc: fe_share * COLD_S[("link:" if desc == "link" else "guideway:") + m]
         phases.append((f"fe:{mesh}", 1 + 6 * n_points, fe_cost(mesh)))
-        phases.append(("figures", 1, _const(COLD_S["figures"])))
+        phases.append(("figures", 1, _const(COLD_S[f"figures:{mesh}"])))
         if contact and n_points == 9:
             phases.append(("diagnosis", 1, _const(COLD_S["diagnosis"])))
         if contact:
-            phases.append(("coverage", 1, _const(COLD_S["coverage"])))
+            phases.append(("coverage", 1, _const(COLD_S["coverage:per_point"] * n_points)))
         if convergence_point:
             for m in ("coarse", "default", "fine"):
                 if m == mesh and convergence_point in points:
