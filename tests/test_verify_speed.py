@@ -206,3 +206,20 @@ def test_bench_steps_are_checked(monkeypatch):
     monkeypatch.setenv("FEMCHECK_BENCH_VERIFY_STEPS", "cold,lukewarm")
     with pytest.raises(FemcheckError, match="lukewarm"):
         bv._steps()
+
+
+def test_validation_page_shows_the_verify_bench_keys():
+    """The page generator takes reports/bench/verify.json as the bench writes it: every flat key with the command
+    that measured it, the per-figure load averages as detail in the JSON (shape only: no figure here is quoted)."""
+    from femcheck.bench.validation_page import render
+    keys = ("make_verify_cold_s", "make_verify_warm_s", "install_s", "make_verify_nomkl_s", "nomkl_peak_gb",
+            "test_suite_s", "ball_tilt_s")
+    fig = {"bench_wall_s": 1.0, "machine": "cpu", "machine_cpus": 2, "load_average": 0.5,
+           **{k: float(i) for i, k in enumerate(keys)}, "verify_stage_s": {"coverage": 1.0},
+           "load_average_by_figure": {k: 0.5 for k in keys}}
+    page = render({"verify": fig})
+    for k in keys:
+        assert f"`{k}` |" in page, k
+    for k, cmd in (("make_verify_cold_s", "make verify"), ("test_suite_s", "make test"), ("install_s", "make venv")):
+        assert f"`{k}` | {float(keys.index(k)):g} (`{cmd}`" in page
+    assert "`load_average_by_figure`" in page and "load average 0.5" in page
