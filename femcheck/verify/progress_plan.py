@@ -16,23 +16,23 @@ from __future__ import annotations
 
 import dataclasses
 
-#: expected wall time (s) per reported step, cold caches, ``--jobs 2``: shares of the stage times of
-#: ``make verify`` (manifest.json timings_s of a default-mesh run on the 2-core machine: device FE 202 s for the
-#: link and 54 guideways, convergence 312 s of which the fine mesh ~300 s, joint laws 119 s, joint table 77 s,
-#: contact diagnosis 191 s, coverage 24 s, tables, plots and VTU 24 s, all at load average 10; the tilt study condensed:
-#: 11 s per solve at load 7). Only the ratios matter.
+#: expected wall time (s) per reported step, cold caches, ``--jobs 2``: the stage times of ``make verify`` (manifest.json
+#: timings_s of a cold default-mesh run of the nine points on the 2-core machine at load average 3-6: tilt study 7.6 s,
+#: joint laws 57 s, joint table 20.5 s, device FE wall 63.5 s for the link and 54 guideways, tables/plots/VTU 8.1 s,
+#: contact diagnosis 28.7 s, coverage 3.8 s, convergence 33.4 s for the coarse and fine meshes at P0), split over the
+#: stage's steps by their sizes (the universal joint ~60 % of the laws; the link ~8 guideways). Only ratios matter.
 COLD_S = {
-    "tilt": 11.0,
-    "law:spherical": 40.0, "law:universal": 79.0,
+    "tilt": 3.8,
+    "law:spherical": 23.0, "law:universal": 34.0,
     # the table re-meshes the ball (graded on the point's load) and reuses the universal joint's condensed model
-    "table:spherical:build": 30.0, "table:spherical:solve": 3.0,
-    "table:universal:build": 2.0, "table:universal:solve": 4.0,
-    "link:coarse": 2.0, "guideway:coarse": 0.5,
-    "link:default": 10.0, "guideway:default": 3.5,
-    "link:fine": 80.0, "guideway:fine": 38.0,
-    # tables, plots, VTU and PNGs of the first point: per mesh level (coarse: 5.7 s of a P0, P5 run at load 9)
-    "figures:coarse": 6.0, "figures:default": 24.0, "figures:fine": 60.0,
-    "diagnosis": 191.0, "coverage:per_point": 2.6, "report": 2.0,
+    "table:spherical:build": 17.0, "table:spherical:solve": 2.0,
+    "table:universal:build": 0.5, "table:universal:solve": 1.0,
+    "link:coarse": 1.0, "guideway:coarse": 0.33,
+    "link:default": 8.0, "guideway:default": 1.03,
+    "link:fine": 12.0, "guideway:fine": 3.0,
+    # tables, plots, VTU and PNGs of the first point, per mesh level
+    "figures:coarse": 4.0, "figures:default": 8.1, "figures:fine": 20.0,
+    "diagnosis": 28.7, "coverage:per_point": 0.42, "report": 1.0,
 }
 #: a step read from a cache costs this share of its cold time (a pickle or npz read; the analytical column)
 CACHED_SHARE = 0.02
@@ -96,7 +96,7 @@ def plan(case, points, levels, mesh: str, joint_fe: bool, joint_mesh: str, conve
             phases.append((f"table:{j}", 1, _const(COLD_S[f"table:{j}:build"] * share)))
             phases.append((f"table:{j}", 1, _const(COLD_S[f"table:{j}:solve"] * share)))
     if levels:
-        fe_share = CACHED_SHARE * 5 if warm_fe else 1.0   # a super-element read: mesh and pickle, no solve
+        fe_share = CACHED_SHARE if warm_fe else 1.0   # a super-element read: a pickle, no mesh, no solve
 
         def fe_cost(m):
             return lambda desc: fe_share * COLD_S[("link:" if desc == "link" else "guideway:") + m]
