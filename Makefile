@@ -32,9 +32,11 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -q
 
-## Throughput and solve-time measurements -> reports/bench/<area>.json (area calculix: side by side with CalculiX when ccx is on PATH, optional)
+## Throughput and solve-time measurements -> reports/bench/<area>.json (area calculix: side by side with CalculiX when ccx is on PATH, optional);
+## AREA=verify (or any area names, space-separated) runs only those: make bench AREA=verify times the install, cold/warm/no-MKL make verify and make test on a fresh clone (~15 min idle)
+AREA ?=
 bench: $(STAMP)
-	$(PY) -m femcheck.bench --snapshot
+	$(PY) -m femcheck.bench --snapshot $(AREA)
 
 ## docs/validation.md from the committed bench figures reports/bench/*.json (make bench also rewrites it)
 validation: $(STAMP)

@@ -22,7 +22,7 @@ JOINTS = ("spherical", "universal")
 def fe_inputs(case) -> dict:
     """Every FE set-up quantity derived from a contact law or spring (repr: compared bit for bit)."""
     from femcheck.fe_device.contact_scales import device_springs
-    from femcheck.fe_device.joint_check import joint_loads
+    from femcheck.fe_device.joint_check import joint_loads, joint_table_key
     from femcheck.fe_device.joint_fe import contact_start
     from femcheck.fe_device.joint_friction import joint_friction
     from femcheck.fe_device.joint_laws import _cache_key, force_ladder
@@ -38,6 +38,7 @@ def fe_inputs(case) -> dict:
         out[f"{j} start"] = repr(contact_start(case, j, loads))
         out[f"{j} ladder start"] = repr(contact_start(case, j, (ladder[0], ladder[-1])))
         out[f"{j} law cache key"] = _cache_key(case, j, "coarse", ladder)
+        out[f"{j} joint table cache key"] = joint_table_key(case, j, "coarse", "P0")
     return out
 
 

@@ -81,4 +81,8 @@ def test_a_bad_non_mkl_schur_method_is_named(monkeypatch):
     monkeypatch.setenv("FEMCHECK_SCHUR_METHOD", "cholmod")
     assert condense(K, r).method == ("cholmod" if cvxopt_available() else "blockwise")
     monkeypatch.delenv("FEMCHECK_SCHUR_METHOD")
-    assert condense(K, r).method == "blockwise"  # the default without MKL: bounded memory
+    # the default without MKL: CHOLMOD where the system is small enough for its fill, blockwise (bounded memory) above
+    assert condense(K, r).method == ("cholmod" if cvxopt_available() else "blockwise")
+    from femcheck.fe import schur_complement
+    monkeypatch.setattr(schur_complement, "CHOLMOD_SCHUR_MAX_DOFS", K.shape[0] - 1)
+    assert condense(K, r).method == "blockwise"

@@ -52,6 +52,7 @@ class StageProgress:
         if self.weights is not None:
             self.total = len(self.weights)
         self.done, self.description = 0, ""
+        self._work_done: float | None = None   # work reported by advance(work=...), when the steps say what they cost
         self._t0 = clock()
         self._last_line = 0.0
         self._lock = threading.Lock()
@@ -88,7 +89,12 @@ class StageProgress:
         return False
 
     # -- updates ---------------------------------------------------------------------------------
-    def advance(self, n: int = 1, description: str = "") -> None:
+    def advance(self, n: int = 1, description: str = "", work: float | None = None) -> None:
+        """``n`` more steps done; ``work``: their expected cost in the weights' units, when the steps do not come in
+        the order of the weights (parallel workers finish in any order): the ETA then counts this work."""
+        if work is not None:
+            with self._lock:
+                self._work_done = (self._work_done or 0.0) + float(work)
         self.update(completed=self.done + n, description=description)
 
     def update(self, completed: int | None = None, total: int | None = None, description: str | None = None) -> None:
@@ -101,7 +107,7 @@ class StageProgress:
                 self.description = description
         if self._bar is not None:
             eta = self.eta_s()
-            self._bar.update(self._task, completed=self._work(self.done), total=self._work(self.total),
+            self._bar.update(self._task, completed=self._done_work(self.done), total=self._work(self.total),
                              description=self.description, steps=self._steps(),
                              eta="" if eta is None else f"ETA {_fmt_s(eta)}")
         elif not self.quiet and self.clock() - self._last_line >= self.interval_s:
@@ -122,6 +128,10 @@ class StageProgress:
             return None
         return float(steps) if self.weights is None else sum(self.weights[:steps])
 
+    def _done_work(self, done: int) -> float | None:
+        """Work of the steps done: as reported by ``advance(work=...)``, else the first ``done`` weights."""
+        return self._work_done if self._work_done is not None else self._work(done)
+
     def _steps(self) -> str:
         return f"{self.done}/{self.total}" if self.total else f"{self.done}"
 
@@ -132,8 +142,8 @@ class StageProgress:
             done, total = self.done, self.total
         if not total or not 0 < done < total:
             return None
-        work_done, work_all = self._work(done), self._work(total)
-        if work_done <= 0:
+        work_done, work_all = self._done_work(done), self._work(total)
+        if work_done <= 0 or work_done >= work_all:
             return None
         return (self.clock() - self._t0) / work_done * (work_all - work_done)
 
@@ -143,7 +153,7 @@ class StageProgress:
         with self._lock:
             done, total, desc = self.done, self.total, self.description
         elapsed = self.clock() - self._t0
-        share = (self._work(done) / self._work(total)) if total and self._work(total) else 0.0
+        share = min(self._done_work(done) / self._work(total), 1.0) if total and self._work(total) else 0.0
         count = f"{done}/{total} ({100 * share:.0f} %)" if total else f"{done}"
         left = self.eta_s()
         eta = "" if left is None else f", ETA {_fmt_s(left)}"

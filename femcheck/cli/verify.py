@@ -95,16 +95,16 @@ def register(app: typer.Typer) -> None:
                 check_output_file(fe_base, "--fe-baseline")
         prepare_run_folder(out, "femcheck verify", force=force, inputs=[case_path, baseline, fe_base])
         con = console()
-        reused = conv_point in (pts or POINT_LABELS) and mesh in ("coarse", "default", "fine")
-        n_solves = 1 + 6 * len(pts or POINT_LABELS) + ((3 - reused) * 7 if conv_point else 0) + \
-            (4 if joint_fe and "detailed" in levels else 0)
         from femcheck.cli import progress
+        from femcheck.verify.progress_plan import plan
+        # each step's expected cost (cold, or read from the caches), so that the ETA counts work, not steps
+        work = plan(case, pts or POINT_LABELS, levels, mesh, joint_fe, joint_mesh, conv_point)
         # progress goes to stderr: stdout opens and closes with the verdict
         err = console(stderr=True)
-        with progress("FE solves", n_solves, err) if levels else progress("analytical", None, err) as bar:
+        with progress("verify", None, err, weights=work.weights) as bar:
             run = run_verify(case, out, pts, check=check, baseline_path=baseline if (check or update_baseline) else None,
                              update_baseline=update_baseline, command="femcheck verify " + case_path, levels=levels,
-                             mesh=mesh, jobs=jobs, progress=lambda desc: bar.advance(1, desc),
+                             mesh=mesh, jobs=jobs, progress=lambda desc: bar.advance(1, desc, work=work(desc)),
                              fe_baseline_path=fe_base if (check or update_baseline) else None, vtu=vtu,
                              convergence_point=conv_point, joint_fe=joint_fe, joint_mesh=joint_mesh)
         print_run(con, run, mesh, baseline if update_baseline else None, fe_base if update_baseline and levels else None)

@@ -26,9 +26,9 @@ S + δ I is positive definite for any δ > 0, and S = L_rr L_rrᵀ − δ I exac
 δ is the mean retained diagonal, so the subtraction loses no more than round-off of S's own scale. The
 interior extension factorizes K_ii once per body after that factor is released (cvxopt exposes the factor
 only as a copy that leaves it unusable for solves, and the bodies' own fill-reducing orderings keep the
-memory below that of the constrained ordering). The blockwise back-substitution (one forward
-and backward solve per retained column, bounded memory) stays the non-MKL default; ``FEMCHECK_SCHUR_METHOD=cholmod``
-selects the CHOLMOD path. Measured on the universal joint's default level (371,298 DOFs, 5,730 retained,
+memory below that of the constrained ordering). Without MKL, systems up to ``CHOLMOD_SCHUR_MAX_DOFS`` unknowns take
+the CHOLMOD path and larger ones the blockwise back-substitution (one forward and backward solve per retained column,
+bounded memory); ``FEMCHECK_SCHUR_METHOD=cholmod`` or ``blockwise`` forces one. Measured on the universal joint's default level (371,298 DOFs, 5,730 retained,
 ``check_joint(case, "universal", "default")`` with ``FEMCHECK_LINEAR_SOLVER=cholmod``, load average ≈ 1–2):
 CHOLMOD path 146.9 s wall, peak RSS 14.9 GB (the AMD-ordered factor and the copy cvxopt's ``getfactor``
 makes of it); blockwise > 900 s (killed) at ≈ 6 GB; PARDISO 49–67 s at ≈ 5.2 GB.
@@ -46,6 +46,11 @@ log = logging.getLogger(__name__)
 
 #: columns per block of the fallback back-substitution (bounds memory to n_i x BLOCK x 8 B)
 BLOCK = 256
+#: without MKL, systems up to this many unknowns take CHOLMOD's partial factorization, larger ones the blockwise
+#: back-substitution (measured, no MKL, load average 8: the universal joint's coarse level, 234,510 unknowns and
+#: 2,970 retained, CHOLMOD 96 s and 7.7 GB peak, blockwise not done after 15 min at 3.5 GB; its default level,
+#: 371,298 unknowns, CHOLMOD 14.9 GB: module doc)
+CHOLMOD_SCHUR_MAX_DOFS = 300_000
 
 
 def schur_complement(K, r: np.ndarray, *, method: str = "auto") -> np.ndarray:
@@ -114,10 +119,12 @@ def condense(K, r: np.ndarray, *, method: str = "auto") -> SchurCondensation:
             # constrained-order factorization where FEMCHECK_SCHUR_METHOD=cholmod asks for it (much faster,
             # but its AMD fill took 14.9 GB on the universal default joint: module doc)
             import os
-            choice = os.environ.get("FEMCHECK_SCHUR_METHOD", "blockwise").strip().lower()
-            if choice not in ("blockwise", "cholmod"):
+            choice = os.environ.get("FEMCHECK_SCHUR_METHOD", "auto").strip().lower()
+            if choice not in ("auto", "blockwise", "cholmod"):
                 from femcheck.errors import FemcheckError
-                raise FemcheckError(f"FEMCHECK_SCHUR_METHOD={choice!r}: expected blockwise or cholmod")
+                raise FemcheckError(f"FEMCHECK_SCHUR_METHOD={choice!r}: expected auto, blockwise or cholmod")
+            if choice == "auto":   # CHOLMOD's partial factorization where its fill fits in memory (module doc)
+                choice = "cholmod" if K.shape[0] <= CHOLMOD_SCHUR_MAX_DOFS else "blockwise"
             method = "cholmod" if choice == "cholmod" and cvxopt_available() else "blockwise"
     if method == "cholmod":
         try:
@@ -146,6 +153,8 @@ def condense(K, r: np.ndarray, *, method: str = "auto") -> SchurCondensation:
 def _pardiso_schur(K, r):
     import pypardiso
 
+    from femcheck.fe.linear_solver import pardiso_available
+    pardiso_available()   # records MKL's path once: a new solver does not search the environment for it
     n, ns = K.shape[0], r.size
     solver = pypardiso.PyPardisoSolver(mtype=-2)  # real symmetric indefinite: S may be singular
     A = sp.triu(K, format="csr")

@@ -40,7 +40,8 @@ JOINT_COST = {"spherical": 1.0, "universal": 2.5}
 BUILD_SHARE = 0.9
 
 
-def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", progress=None) -> dict:
+def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", progress=None,
+                use_cache: bool = False) -> dict:
     """Contact FE of ``joint`` at the device load of ``point``: the JSON object of ``check-joints``.
 
     Keys (contract): converged, dofs, iterations, seconds, fe_compliance, analytical_compliance
@@ -51,14 +52,46 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
     line_search_cuts, stabilized_iterations, stabilization_force_share (< 1e-6 required), residual_rel. A joint that does not
     converge raises :class:`femcheck.errors.ConvergenceError` (residual history, chattering points).
     ``progress(description)`` is called after the build (mesh, condensation) and after the contact solve.
+    ``use_cache``: read the contact FE's part from the result cache (:mod:`femcheck.fe.result_cache`, keyed by the
+    joint's case sections, the loads, the mesh level and the FE code) and store it there after a solve; the
+    analytical column is evaluated every time.
     """
+    from femcheck.fe import result_cache
     from femcheck.fe_device import joint_fe as jf
 
     loads = joint_loads(case, point)
-    model = jf.build_joint(case, joint, mesh, max_load_N=max(loads))
+    key = joint_table_key(case, joint, mesh, point)
+    fe_part = result_cache.load("joint_check", key) if use_cache else None
+    if fe_part is None:
+        fe_part = _joint_fe(case, joint, mesh, loads, progress)
+        if use_cache:
+            result_cache.store("joint_check", key, fe_part)
+    elif progress:
+        progress(f"{joint}: read from the cache")
+        progress(f"{joint}: read from the cache")
+    an = jf.analytical_compliance(case, joint, loads)
+    return {**fe_part, "point": point.upper(), "analytical_compliance": _json_matrix(an),
+            "error_pct": jf.error_pct(np.asarray(fe_part["fe_component_compliance"], float), an)}
+
+
+def joint_table_key(case, joint: str, mesh: str, point: str = "P0") -> str:
+    """Result-cache key of :func:`check_joint`'s contact FE: the joint's case sections, its loads at ``point``, the
+    mesh level (and the FE code, :func:`femcheck.fe.result_cache.result_key`)."""
+    from femcheck.fe import result_cache
+    return result_cache.result_key("joint_check", {
+        "joint": joint, "mesh": mesh, "loads_N": list(joint_loads(case, point)),
+        "spherical_joint": repr(case.spherical_joint), "universal_joint": repr(case.universal_joint),
+        "solid": repr(case.solid)})
+
+
+def _joint_fe(case, joint: str, mesh: str, loads, progress=None) -> dict:
+    """The contact-FE part of :func:`check_joint` (everything but the analytical column)."""
+    from femcheck.fe_device import joint_fe as jf
+
+    from femcheck.fe_device.joint_models import condensed_joint
+    model = condensed_joint(case, joint, mesh, max_load_N=max(loads))
     if progress:
         progress(f"{joint}: mesh and condensation")
-    an = jf.analytical_compliance(case, joint, loads)
     tol, start = jf.contact_start(case, joint, loads)
     # spherical: the ball is pressed into the seat (−z); universal: the link pushes its yoke along +z
     sign = -1.0 if joint == "spherical" else 1.0
@@ -71,7 +104,7 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
     from femcheck.fe_device.mesh_levels import joint_mesh_sizes
     ms = joint_mesh_sizes(case, joint, mesh, max(loads))
     fe = r.fe_compliance
-    return {"joint": joint, "mesh": mesh, "point": point.upper(), "converged": True, "dofs": r.dofs,
+    return {"joint": joint, "mesh": mesh, "converged": True, "dofs": r.dofs,
             "free_dofs": r.free_dofs, "retained_dofs": r.retained, "iterations": r.iterations,
             "factorizations": r.factorizations + model.factorizations, "augmentations": r.augmentations,
             "low_rank_updates": r.low_rank_updates, "contact_size_m": ms.contact_m, "bulk_size_m": ms.bulk_m,
@@ -81,10 +114,9 @@ def check_joint(case, joint: str, mesh: str = "default", point: str = "P0", prog
             "line_search_cuts": r.line_search_cuts, "stabilized_iterations": r.stabilized_iterations,
             "stabilization_force_share": r.stabilization_force_share, "residual_rel": r.residual_rel,
             "secant_axial_m_per_N": r.secant_axial_m_per_N, "closed_points": r.closed_points,
-            "fe_compliance": _json_matrix(fe), "analytical_compliance": _json_matrix(an),
+            "fe_compliance": _json_matrix(fe),
             "fe_component_compliance": _json_matrix(r.component_compliance[None])[0],
-            "fe_tangent_stiffness": _json_matrix(r.tangent_stiffness),
-            "error_pct": jf.error_pct(r.component_compliance, an)}
+            "fe_tangent_stiffness": _json_matrix(r.tangent_stiffness)}
 
 
 def progress_weights(joints) -> list[float]:

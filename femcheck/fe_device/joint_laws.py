@@ -231,7 +231,8 @@ def measure_joint_law(case, joint: str, mesh: str = "coarse", ladder=None, use_c
             log.info("%s joint law (%s mesh) read from the cache %s", joint, mesh, path.name)
             return hit
     t0 = time.perf_counter()
-    model = jf.build_joint(case, joint, mesh, max_load_N=float(ladder[-1]))
+    from femcheck.fe_device.joint_models import condensed_joint
+    model = condensed_joint(case, joint, mesh, max_load_N=float(ladder[-1]))
     # as check-joints: tolerance and starting patch from the FE's own estimate, stick the contact area
     tol, start = jf.contact_start(case, joint, (float(ladder[0]), float(ladder[-1])))
     sign = -1.0 if joint == "spherical" else 1.0

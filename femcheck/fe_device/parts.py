@@ -40,7 +40,7 @@ class SuperElement:
     ref_points (m, 3) m; dofs: unknowns of the FE model before condensation; mesh_s / assembly_s /
     solve_s: wall time of meshing, assembly and factorization + condensation (s); vertices (nv, 3) m and
     tets (nt, 4) of the linear mesh (empty for beams); recovery (3 nv, 6m): vertex displacements
-    u = recovery @ u_ref (m); n_tets; solver: linear solver used.
+    u = recovery @ u_ref (m); n_tets; solver: linear solver used; cached: read from the result cache.
     """
 
     name: str
@@ -55,6 +55,7 @@ class SuperElement:
     tets: np.ndarray
     recovery: np.ndarray
     solver: str = ""
+    cached: bool = False
 
     @property
     def n_tets(self) -> int:
@@ -70,7 +71,42 @@ def condense_solid(part_mesh, E, nu, clamps: tuple[str, ...], couplings: dict[st
 
     clamps: region names fixed to zero; couplings: region name -> reference point (3,) m (RBE2, one
     6-DOF node each, in the given order). E (Pa), nu: the part's material.
+
+    The result is cached on disk (:func:`cached_superelement`).
     """
+    return cached_superelement(part_mesh.cache_key, E, nu, clamps, couplings, name, lambda: (part_mesh, mesh_s))
+
+
+def cached_superelement(mesh_key: str, E, nu, clamps, couplings: dict, name: str, build_mesh) -> SuperElement:
+    """:func:`condense_solid` through the result cache (:mod:`femcheck.fe.result_cache`): keyed by the mesh's own
+    key (its part parameters and the meshing code, known before meshing), the material, the clamps, the couplings
+    and the FE code. A second run of the same part reads it without meshing (``mesh_s``, ``assembly_s`` 0,
+    ``solve_s`` the read time, ``cached`` True); otherwise ``build_mesh()`` -> (PartMesh, meshing time s) is
+    condensed and stored. An empty ``mesh_key`` (a mesh made outside the cache) is never cached."""
+    from femcheck.fe import result_cache
+    key = None
+    if mesh_key:
+        key = _superelement_key(mesh_key, E, nu, clamps, couplings, name)
+        t0 = time.perf_counter()
+        hit = result_cache.load("superelement", key)
+        if hit is not None:
+            log.info("%s: super-element read from the cache", name)
+            return dataclasses.replace(hit, mesh_s=0.0, assembly_s=0.0, solve_s=time.perf_counter() - t0, cached=True)
+    part_mesh, mesh_s = build_mesh()
+    se = _condense_solid(part_mesh, E, nu, clamps, couplings, name, mesh_s)
+    if key is not None:
+        result_cache.store("superelement", key, se)
+    return se
+
+
+def _superelement_key(mesh_key: str, E, nu, clamps, couplings: dict, name: str) -> str:
+    from femcheck.fe import result_cache
+    return result_cache.result_key("superelement", {
+        "mesh": mesh_key, "E_Pa": np.asarray(E, float).tolist(), "nu": np.asarray(nu, float).tolist(),
+        "clamps": list(clamps), "name": name, "couplings": {k: [float(x) for x in v] for k, v in couplings.items()}})
+
+
+def _condense_solid(part_mesh, E, nu, clamps, couplings, name, mesh_s) -> SuperElement:
     from femcheck.fe import constraints as cs
     from femcheck.fe.elasticity import assemble_stiffness, dof_triplets, vector_basis
     from femcheck.fe.linear_solver import factorize
@@ -130,11 +166,10 @@ def guideway_element(case, length_m: float, kind: str = "solid", size_m: float |
     if kind != "solid":
         raise ValueError(f"part kind = {kind!r}; expected one of {', '.join(PART_KINDS)}")
     from geometry import guideway
-    t0 = time.perf_counter()
-    pm = guideway.build(case, size_m, length_m=length_m)
-    tm = time.perf_counter() - t0
-    return condense_solid(pm, g.material.E_Pa, g.material.nu, ("lg_clamp",),
-                          {"lg_slider": np.array([0.0, 0.0, length_m])}, "guideway", tm)
+    from geometry.cache import cache_key
+    return cached_superelement(cache_key(guideway.PART, guideway.parameters(case, size_m, length_m=length_m)),
+                               g.material.E_Pa, g.material.nu, ("lg_clamp",), {"lg_slider": np.array([0.0, 0.0, length_m])},
+                               "guideway", lambda: _timed(lambda: guideway.build(case, size_m, length_m=length_m)))
 
 
 def link_element(case, kind: str = "solid", size_m: float | None = None) -> SuperElement:
@@ -151,8 +186,33 @@ def link_element(case, kind: str = "solid", size_m: float | None = None) -> Supe
     if kind != "solid":
         raise ValueError(f"part kind = {kind!r}; expected one of {', '.join(PART_KINDS)}")
     from geometry import proximal_link
+    from geometry.cache import cache_key
+    return cached_superelement(cache_key(proximal_link.PART, proximal_link.parameters(case, size_m)),
+                               pl.material.E_Pa, pl.material.nu, (),
+                               {"prox_end_B": np.zeros(3), "prox_end_C": np.array([0.0, 0.0, L2])}, "proximal_link",
+                               lambda: _timed(lambda: proximal_link.build(case, size_m)))
+
+
+def superelement_cached(case, part: str, size_m: float, length_m: float | None = None) -> bool:
+    """Whether the solid super-element of ``part`` ("guideway" of cantilever ``length_m``, or "link") at mesh size
+    ``size_m`` is in the result cache (a read then takes milliseconds: no worker process is worth starting for it)."""
+    from femcheck.fe import result_cache
+    from geometry import guideway, proximal_link
+    from geometry.cache import cache_key
+    if part == "guideway":
+        g = case.guideway
+        mesh_key = cache_key(guideway.PART, guideway.parameters(case, size_m, length_m=length_m))
+        return result_cache.has("superelement", _superelement_key(mesh_key, g.material.E_Pa, g.material.nu, ("lg_clamp",),
+                                                                  {"lg_slider": np.array([0.0, 0.0, length_m])}, "guideway"))
+    pl, L2 = case.proximal_link, case.geometry.proximal_link_length_m
+    mesh_key = cache_key(proximal_link.PART, proximal_link.parameters(case, size_m))
+    return result_cache.has("superelement", _superelement_key(
+        mesh_key, pl.material.E_Pa, pl.material.nu, (), {"prox_end_B": np.zeros(3), "prox_end_C": np.array([0.0, 0.0, L2])},
+        "proximal_link"))
+
+
+def _timed(build):
+    """(build(), its wall time s)."""
     t0 = time.perf_counter()
-    pm = proximal_link.build(case, size_m)
-    tm = time.perf_counter() - t0
-    return condense_solid(pm, pl.material.E_Pa, pl.material.nu, (),
-                          {"prox_end_B": np.zeros(3), "prox_end_C": np.array([0.0, 0.0, L2])}, "proximal_link", tm)
+    out = build()
+    return out, time.perf_counter() - t0

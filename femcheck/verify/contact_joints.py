@@ -106,6 +106,11 @@ def ball_tilt_study(case, progress=None, use_cache: bool = True) -> dict:
     return out
 
 
+def tilt_cached(case) -> bool:
+    """Whether both runs of the tilt study are in the cache (:func:`ball_tilt_study` then reads them)."""
+    return all(_tilt_cache_path(case, mu).is_file() for mu in (0.0, case.solid.spherical_joint.friction))
+
+
 def _tilt_cache_path(case, mu: float):
     """``<cache>/ball_tilt/<key>.npz``; key = the inputs of :func:`spherical_joint_tilt` and the hash of the
     contact-FE source (any change of that code or of the joint measures it again)."""

@@ -107,10 +107,21 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
     note = progress or (lambda desc: None)
     tasks = [(k, i, float(legs.slider[k, i])) for k in range(len(points)) for i in range(6)]
     got: dict = {}
-    if jobs > 1:
+    link = None
+    if jobs > 1 and kind == "solid":
+        # super-elements already in the result cache are read here: a worker process costs more to start
+        from femcheck.fe_device.parts import superelement_cached
+        if superelement_cached(case, "link", sizes.link_m):
+            link = build_link(case, kind, sizes.link_m)
+            note("link")
+        for k, i, s in [t for t in tasks if superelement_cached(case, "guideway", sizes.guideway_m, t[2])]:
+            got[(k, i)] = guideway_task(case, s, kind, sizes.guideway_m)
+            note(f"{points[k]} guideway {i}")
+        tasks = [t for t in tasks if (t[0], t[1]) not in got]
+    if jobs > 1 and (tasks or link is None):
         ctx = mp.get_context("spawn")
         with cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as ex:
-            futs = {ex.submit(build_link, case, kind, sizes.link_m): "link"}  # the biggest solve goes first
+            futs = {} if link is not None else {ex.submit(build_link, case, kind, sizes.link_m): "link"}  # biggest first
             futs.update({ex.submit(guideway_task, case, s, kind, sizes.guideway_m): (k, i) for k, i, s in tasks})
             for f in cf.as_completed(futs):
                 key = futs[f]
@@ -120,7 +131,7 @@ def run_fe(case, points, levels=("simplified", "detailed"), mesh: str = "default
                     continue
                 got[key] = f.result()
                 note(f"{points[key[0]]} guideway {key[1]}")
-    else:
+    elif jobs <= 1:
         link = build_link(case, kind, sizes.link_m)
         note("link")
         for k, i, s in tasks:

@@ -192,7 +192,8 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     """Run the verification on ``case`` and write everything into ``out_dir`` (atomically, file by file).
 
     ``levels``: FE levels to run ('simplified', 'detailed'; empty = analytical only); ``mesh``: FE mesh
-    level; ``jobs``: worker processes for the FE solves; ``progress(description)`` after each FE solve;
+    level; ``jobs``: worker processes for the FE solves; ``progress(description)`` after each FE solve and
+    each later stage (the steps of :func:`femcheck.verify.progress_plan.plan`);
     ``fe_baseline_path``: FE baseline for --check / --update-baseline; ``vtu``: deformed FE models as VTU
     at the first point ('first'), at every point ('all') or nowhere ('none'); ``convergence_point``: run the
     mesh-convergence study (coarse/default/fine) at this point and write ``mesh_convergence.csv``;
@@ -203,6 +204,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     (``manifest.json`` ``joint_laws``); run the joint table.
     """
     t0 = time.perf_counter()
+    note = progress or (lambda desc: None)
     from femcheck.case.solver_options import apply as apply_solver_choice
     log.info("linear solver: %s", apply_solver_choice(case))
     out = Path(out_dir)
@@ -236,7 +238,9 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         from femcheck.fe_device.joint_check import check_joint
         from femcheck.fe_device.joint_fe import JOINTS as JOINT_TYPES
         tc = time.perf_counter()
-        joint_results = [check_joint(case, j, joint_mesh, "P0") for j in JOINT_TYPES]
+        from femcheck.fe_device.joint_models import release
+        joint_results = [check_joint(case, j, joint_mesh, "P0", progress=progress, use_cache=True) for j in JOINT_TYPES]
+        release()
         t_joints = time.perf_counter() - tc
     if levels:
         from femcheck.verify.fe import run_fe
@@ -279,6 +283,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
     contact_diag = None
     if fe is not None:
         fe_tabs, fe_times = _fe_sections(case, av, fe, pts, put, sections, out, vtu, pngs, tilt)
+        note("tables, plots and VTU")
         fe_times["ball_tilt_contact_fe"] = round(t_tilt, 2)
         if joint_results:
             from femcheck.fe_device.joint_check import joint_table_rows, joint_table_section, write_joint_table_csv
@@ -305,6 +310,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                      "dials) from the detailed FE with contact joints, diagnosed against the detailed analytical model: "
                      "which cause femcheck names and the held-out error before and after (files contact_fe_*.csv/json)."))
             fe_times["contact_fe_diagnosis"] = round(time.perf_counter() - tc, 2)
+            note("contact FE diagnosis")
     coverage = None
     if fe is not None and "detailed" in fe.levels and has_contact_joints(fe):
         # which elements does this FE check at all? mutate each law, reuse the condensed super-elements
@@ -332,6 +338,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                  "'shared_closed_form' when it moves alike (the FE reuses the law: an "
                  "agreement there holds by construction). femcheck coverage, docs/verify.md."))
         fe_times["coverage"] = round(time.perf_counter() - tc, 2)
+        note("coverage")
     checks: list[Check] = []
     conv_info, conv_check = None, None
     if convergence_point and levels:
@@ -414,5 +421,6 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
                                "drift": drift, "threshold_failures": failures},
                      "verdict": verdict(checks, worst_err).as_json()})
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
+    note("report")
     return VerifyRun(out_dir=out, analytical=av, drift=tuple(drift), files=tuple(files), seconds=seconds, fe=fe,
                      failures=tuple(failures), checks=tuple(checks), worst_errors=tuple(worst_err))
