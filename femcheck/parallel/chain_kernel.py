@@ -80,13 +80,21 @@ def _chol(A, Lf, m):
 
 
 @njit(cache=True, error_model="numpy")
-def _chol_solve(Lf, b, x, m):
+def _chol_forward(Lf, b, x, m):
+    """x[:m] = Lf^-1 b (forward substitution). With :func:`_chol_back`, the solve with Lf Lf^T: two leaves (one
+    function holding both loops counts references, see :func:`_rot`)."""
     for i in range(m):
         s = b[i]
         for k in range(i):
             s -= Lf[i, k] * x[k]
         x[i] = s / Lf[i, i]
-    for i in range(m - 1, -1, -1):
+
+
+@njit(cache=True, error_model="numpy")
+def _chol_back(Lf, x, m):
+    """x[:m] = Lf^-T x in place (back substitution)."""
+    for ii in range(m):
+        i = m - 1 - ii
         s = x[i]
         for k in range(i + 1, m):
             s -= Lf[k, i] * x[k]
@@ -282,37 +290,38 @@ def _sp2_z(w1, w2, p, qv, z):
     """Paden-Kahan subproblem 2, Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point): the intermediate
     z = Rot(w2, t2) p = Rot(w1, -t1) qv nearest p (the home branch); False if none is real. The angles follow by
     subproblem 1 twice: t2 = _sp1(w2, p, z), t1 = _sp1(w1, z, qv)."""
-    ok = False
     c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
     den = 1.0 - c12 * c12
-    if den >= 1e-12:
-        w1q = w1[0] * qv[0] + w1[1] * qv[1] + w1[2] * qv[2]
-        w2p = w2[0] * p[0] + w2[1] * p[1] + w2[2] * p[2]
-        al = (w1q - c12 * w2p) / den
-        be = (w2p - c12 * w1q) / den
-        cr0 = w1[1] * w2[2] - w1[2] * w2[1]
-        cr1 = w1[2] * w2[0] - w1[0] * w2[2]
-        cr2 = w1[0] * w2[1] - w1[1] * w2[0]
-        pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
-        g2 = (pp - al * al - be * be - 2.0 * al * be * c12) / den
-        if g2 < 0.0 and g2 >= -1e-12 * pp:
-            g2 = 0.0
-        if g2 >= 0.0:
-            ok = True
-            g = math.sqrt(g2)
-            best = 1e300
-            for branch in range(2):   # (not a tuple: iterating over one is a call, which keeps this from a leaf)
-                sg = -1.0 if branch == 0 else 1.0
-                d = 0.0
-                for i in range(3):
-                    zi = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-                    dz = zi - p[i]
-                    d += dz * dz   # (not ** 2: numba's integer power is a call, which keeps this from a leaf)
-                if d < best:
-                    best = d
-                    for i in range(3):
-                        z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-    return ok
+    if den < 1e-12:
+        return False
+    w1q = w1[0] * qv[0] + w1[1] * qv[1] + w1[2] * qv[2]
+    w2p = w2[0] * p[0] + w2[1] * p[1] + w2[2] * p[2]
+    al = (w1q - c12 * w2p) / den
+    be = (w2p - c12 * w1q) / den
+    cr0 = w1[1] * w2[2] - w1[2] * w2[1]
+    cr1 = w1[2] * w2[0] - w1[0] * w2[2]
+    cr2 = w1[0] * w2[1] - w1[1] * w2[0]
+    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+    g2 = (pp - al * al - be * be - 2.0 * al * be * c12) / den
+    if g2 < 0.0 and g2 >= -1e-12 * pp:
+        g2 = 0.0
+    if not g2 >= 0.0:
+        return False
+    g = math.sqrt(abs(g2))   # (g2 >= 0 here; abs lets the compiler use the sqrt instruction, no libm call)
+    # the two branches written out, the nearer to p kept (a loop here keeps the function from a leaf, see _rot)
+    b0, b1, b2 = al * w1[0] + be * w2[0], al * w1[1] + be * w2[1], al * w1[2] + be * w2[2]
+    gm, gp = -1.0 * g, 1.0 * g
+    m0, m1, m2 = b0 + gm * cr0 - p[0], b1 + gm * cr1 - p[1], b2 + gm * cr2 - p[2]
+    d_m = m0 * m0 + m1 * m1 + m2 * m2
+    m0, m1, m2 = b0 + gp * cr0 - p[0], b1 + gp * cr1 - p[1], b2 + gp * cr2 - p[2]
+    d_p = m0 * m0 + m1 * m1 + m2 * m2
+    best = 1e300
+    if d_m < best:
+        best = d_m
+        z[0], z[1], z[2] = b0 + gm * cr0, b1 + gm * cr1, b2 + gm * cr2
+    if d_p < best:
+        z[0], z[1], z[2] = b0 + gp * cr0, b1 + gp * cr1, b2 + gp * cr2
+    return True
 
 
 @njit(cache=True, error_model="numpy")
@@ -683,7 +692,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                             Mn[a, a] += 1e-13 * tr
                         if not _chol(Mn, Lf, nd):
                             break
-                        _chol_solve(Lf, rhs, y, nd)
+                        _chol_forward(Lf, rhs, y, nd)
+                        _chol_back(Lf, y, nd)
                         for a in range(nd):
                             rhs[a] = y[a]
                     else:
@@ -700,7 +710,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                             Mn[a, a] += 1e-13 * tr
                         if not _chol(Mn, Lf, 6):
                             break
-                        _chol_solve(Lf, e, y, 6)
+                        _chol_forward(Lf, e, y, 6)
+                        _chol_back(Lf, y, 6)
                         for k in range(nd):
                             acc = 0.0
                             for i in range(6):
@@ -1194,7 +1205,8 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                     K[j, i] = K[i, j]
             if not _chol(K, Lf, 6):
                 return -1 - p
-            _chol_solve(Lf, wv, t, 6)
+            _chol_forward(Lf, wv, t, 6)
+            _chol_back(Lf, t, 6)
             if not any_hp:
                 break
             # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
