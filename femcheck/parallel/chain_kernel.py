@@ -134,8 +134,9 @@ def _rot(w0, w1, w2, c, s, R):
     of a function with atomic increments; they are pruned only in a function that calls no other compiled
     function (inlined or not). Such a leaf costs nothing to call, a function that calls others costs two atomic
     operations per array argument and call (~5 to 10 ns each); ``x ** 2`` and iterating over a tuple are calls
-    too, and so, it seems, are some math intrinsics (:func:`_sp2_z`, with ``np.sqrt``, still counts). The helpers
-    are leaves,
+    too (the scalar functions called are ``math``'s: an instruction or a libm call). A function holding two loops one
+    after the other may count as well (hence :func:`_chol_forward` and :func:`_chol_back`; :func:`_sp2_z` still
+    counts). The helpers are leaves,
     and the closed forms are written out in :func:`_ik_range`'s loop (as an inlined function taking tuples of
     work arrays they cost ~50 atomic operations per leg and pose, a third of the released model's time)."""
     v = 1.0 - c
@@ -308,7 +309,7 @@ def _sp2_z(w1, w2, p, qv, z):
     if not g2 >= 0.0:
         return False
     g = math.sqrt(abs(g2))   # (g2 >= 0 here; abs lets the compiler use the sqrt instruction, no libm call)
-    # the two branches written out, the nearer to p kept (a loop here keeps the function from a leaf, see _rot)
+    # the two branches written out, the one nearer to p kept
     b0, b1, b2 = al * w1[0] + be * w2[0], al * w1[1] + be * w2[1], al * w1[2] + be * w2[2]
     gm, gp = -1.0 * g, 1.0 * g
     m0, m1, m2 = b0 + gm * cr0 - p[0], b1 + gm * cr1 - p[1], b2 + gm * cr2 - p[2]
