@@ -44,6 +44,8 @@ device tables (:mod:`femcheck.parallel.kernel_tables`, from :func:`femcheck.para
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -68,7 +70,7 @@ def _chol(A, Lf, m):
             s -= Lf[j, k] * Lf[j, k]
         if not s > 0.0:
             return False
-        Lf[j, j] = np.sqrt(s)
+        Lf[j, j] = math.sqrt(s)
         for i in range(j + 1, m):
             s = A[i, j]
             for k in range(j):
@@ -78,13 +80,21 @@ def _chol(A, Lf, m):
 
 
 @njit(cache=True, error_model="numpy")
-def _chol_solve(Lf, b, x, m):
+def _chol_forward(Lf, b, x, m):
+    """x[:m] = Lf^-1 b (forward substitution). With :func:`_chol_back`, the solve with Lf Lf^T: two leaves (one
+    function holding both loops counts references, see :func:`_rot`)."""
     for i in range(m):
         s = b[i]
         for k in range(i):
             s -= Lf[i, k] * x[k]
         x[i] = s / Lf[i, i]
-    for i in range(m - 1, -1, -1):
+
+
+@njit(cache=True, error_model="numpy")
+def _chol_back(Lf, x, m):
+    """x[:m] = Lf^-T x in place (back substitution)."""
+    for ii in range(m):
+        i = m - 1 - ii
         s = x[i]
         for k in range(i + 1, m):
             s -= Lf[k, i] * x[k]
@@ -92,19 +102,28 @@ def _chol_solve(Lf, b, x, m):
 
 
 @njit(cache=True, error_model="numpy")
-def _chol_inverse(Lf, out, e, x, m):
+def _chol_inverse(Lf, out, m):
+    """out[:m, :m] = (Lf Lf^T)^-1 = Lf^-T Lf^-1 from the Cholesky factor Lf, symmetric by construction.
+
+    Lf^-1 (lower) is written transposed into the upper triangle of out (out[j, i] = (Lf^-1)[i, j], i >= j), then
+    out[a, b] = sum_{k >= b} out[a, k] out[b, k] (a <= b) overwrites it row by row in place (an entry is read only
+    before it is overwritten): m^3 / 3 multiplications, a third of m solves with the factor."""
     for j in range(m):
-        for i in range(m):
-            e[i] = 0.0
-        e[j] = 1.0
-        _chol_solve(Lf, e, x, m)
-        for i in range(m):
-            out[i, j] = x[i]
-    for i in range(m):
-        for j in range(i + 1, m):
-            s = 0.5 * (out[i, j] + out[j, i])
-            out[i, j] = s
-            out[j, i] = s
+        out[j, j] = 1.0 / Lf[j, j]
+        for i in range(j + 1, m):
+            s = 0.0
+            for k in range(j, i):
+                s += Lf[i, k] * out[j, k]
+            out[j, i] = -s / Lf[i, i]
+    for a in range(m):
+        for b in range(a, m):
+            s = 0.0
+            for k in range(b, m):
+                s += out[a, k] * out[b, k]
+            out[a, b] = s
+    for a in range(m):
+        for b in range(a + 1, m):
+            out[b, a] = out[a, b]
 
 
 @njit(cache=True, error_model="numpy")
@@ -115,8 +134,9 @@ def _rot(w0, w1, w2, c, s, R):
     of a function with atomic increments; they are pruned only in a function that calls no other compiled
     function (inlined or not). Such a leaf costs nothing to call, a function that calls others costs two atomic
     operations per array argument and call (~5 to 10 ns each); ``x ** 2`` and iterating over a tuple are calls
-    too, and so, it seems, are some math intrinsics (:func:`_sp2_z`, with ``np.sqrt``, still counts). The helpers
-    are leaves,
+    too (the scalar functions called are ``math``'s: an instruction or a libm call). A function holding two loops one
+    after the other may count as well (hence :func:`_chol_forward` and :func:`_chol_back`; :func:`_sp2_z` still
+    counts). The helpers are leaves,
     and the closed forms are written out in :func:`_ik_range`'s loop (as an inlined function taking tuples of
     work arrays they cost ~50 atomic operations per leg and pose, a third of the released model's time)."""
     v = 1.0 - c
@@ -168,7 +188,7 @@ def _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk):
     for k in range(nd):
         w0, w1, w2 = daxis[l, k, 0], daxis[l, k, 1], daxis[l, k, 2]
         if dkind[l, k] == 0:
-            c, s = np.cos(q[k]), np.sin(q[k])
+            c, s = math.cos(q[k]), math.sin(q[k])
             v = 1.0 - c   # Rot(w, q) as _rot (written out: _forward stays a leaf)
             Rk[0, 0] = c + w0 * w0 * v
             Rk[0, 1] = w0 * w1 * v - w2 * s
@@ -211,8 +231,8 @@ def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
     # rotation vector of Rerr (as femcheck.kinematics.frames.matrix_to_rotvec, angles below pi)
     cs = (Rerr[0, 0] + Rerr[1, 1] + Rerr[2, 2] - 1.0) / 2.0
     cs = min(1.0, max(-1.0, cs))
-    th = np.arccos(cs)
-    s = np.sin(th)
+    th = math.acos(cs)
+    s = math.sin(th)
     f = 0.5 if th < 1e-8 else th / (2.0 * (1.0 if s == 0.0 else s))
     e[3] = (Rerr[2, 1] - Rerr[1, 2]) * f
     e[4] = (Rerr[0, 2] - Rerr[2, 0]) * f
@@ -220,7 +240,7 @@ def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
     acc = 0.0
     for i in range(6):
         acc += e[i] * e[i]
-    return np.sqrt(acc)
+    return math.sqrt(acc)
 
 
 @njit(cache=True, error_model="numpy")
@@ -257,13 +277,13 @@ def _sp1(w, p, z, cs, k, angle):
     z0, z1, z2 = z[0] - w[0] * wz, z[1] - w[1] * wz, z[2] - w[2] * wz
     cx, cy, cz = p1 * z2 - p2 * z1, p2 * z0 - p0 * z2, p0 * z1 - p1 * z0
     y, x = w[0] * cx + w[1] * cy + w[2] * cz, p0 * z0 + p1 * z1 + p2 * z2
-    r = np.sqrt(x * x + y * y)
+    r = math.sqrt(x * x + y * y)
     if r > 0.0:
         ri = 1.0 / r
         cs[k], cs[k + 1] = x * ri, y * ri
     else:
         cs[k], cs[k + 1] = 1.0, 0.0
-    return np.arctan2(y, x) if angle else 0.0
+    return math.atan2(y, x) if angle else 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -271,36 +291,38 @@ def _sp2_z(w1, w2, p, qv, z):
     """Paden-Kahan subproblem 2, Rot(w1, t1) Rot(w2, t2) p = qv (axes through one point): the intermediate
     z = Rot(w2, t2) p = Rot(w1, -t1) qv nearest p (the home branch); False if none is real. The angles follow by
     subproblem 1 twice: t2 = _sp1(w2, p, z), t1 = _sp1(w1, z, qv)."""
-    ok = False
     c12 = w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]
     den = 1.0 - c12 * c12
-    if den >= 1e-12:
-        w1q = w1[0] * qv[0] + w1[1] * qv[1] + w1[2] * qv[2]
-        w2p = w2[0] * p[0] + w2[1] * p[1] + w2[2] * p[2]
-        al = (w1q - c12 * w2p) / den
-        be = (w2p - c12 * w1q) / den
-        cr0 = w1[1] * w2[2] - w1[2] * w2[1]
-        cr1 = w1[2] * w2[0] - w1[0] * w2[2]
-        cr2 = w1[0] * w2[1] - w1[1] * w2[0]
-        pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
-        g2 = (pp - al * al - be * be - 2.0 * al * be * c12) / den
-        if g2 < 0.0 and g2 >= -1e-12 * pp:
-            g2 = 0.0
-        if g2 >= 0.0:
-            ok = True
-            g = np.sqrt(g2)
-            best = 1e300
-            for sg in (-1.0, 1.0):
-                d = 0.0
-                for i in range(3):
-                    zi = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-                    dz = zi - p[i]
-                    d += dz * dz   # (not ** 2: numba's integer power is a call, which keeps this from a leaf)
-                if d < best:
-                    best = d
-                    for i in range(3):
-                        z[i] = al * w1[i] + be * w2[i] + sg * g * (cr0 if i == 0 else (cr1 if i == 1 else cr2))
-    return ok
+    if den < 1e-12:
+        return False
+    w1q = w1[0] * qv[0] + w1[1] * qv[1] + w1[2] * qv[2]
+    w2p = w2[0] * p[0] + w2[1] * p[1] + w2[2] * p[2]
+    al = (w1q - c12 * w2p) / den
+    be = (w2p - c12 * w1q) / den
+    cr0 = w1[1] * w2[2] - w1[2] * w2[1]
+    cr1 = w1[2] * w2[0] - w1[0] * w2[2]
+    cr2 = w1[0] * w2[1] - w1[1] * w2[0]
+    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+    g2 = (pp - al * al - be * be - 2.0 * al * be * c12) / den
+    if g2 < 0.0 and g2 >= -1e-12 * pp:
+        g2 = 0.0
+    if not g2 >= 0.0:
+        return False
+    g = math.sqrt(abs(g2))   # (g2 >= 0 here; abs lets the compiler use the sqrt instruction, no libm call)
+    # the two branches written out, the one nearer to p kept
+    b0, b1, b2 = al * w1[0] + be * w2[0], al * w1[1] + be * w2[1], al * w1[2] + be * w2[2]
+    gm, gp = -1.0 * g, 1.0 * g
+    m0, m1, m2 = b0 + gm * cr0 - p[0], b1 + gm * cr1 - p[1], b2 + gm * cr2 - p[2]
+    d_m = m0 * m0 + m1 * m1 + m2 * m2
+    m0, m1, m2 = b0 + gp * cr0 - p[0], b1 + gp * cr1 - p[1], b2 + gp * cr2 - p[2]
+    d_p = m0 * m0 + m1 * m1 + m2 * m2
+    best = 1e300
+    if d_m < best:
+        best = d_m
+        z[0], z[1], z[2] = b0 + gm * cr0, b1 + gm * cr1, b2 + gm * cr2
+    if d_p < best:
+        z[0], z[1], z[2] = b0 + gp * cr0, b1 + gp * cr1, b2 + gp * cr2
+    return True
 
 
 @njit(cache=True, error_model="numpy")
@@ -316,9 +338,9 @@ def _cardan(daxis_s, Rs, q, k0, A, T):
         x2 = Rs[2, 0] * A[0, j] + Rs[2, 1] * A[1, j] + Rs[2, 2] * A[2, j]
         for i in range(3):
             T[i, j] = A[0, i] * x0 + A[1, i] * x1 + A[2, i] * x2
-    q[k0 + 1] = np.arcsin(min(1.0, max(-1.0, T[0, 2])))
-    q[k0] = np.arctan2(-T[1, 2], T[2, 2])
-    q[k0 + 2] = np.arctan2(-T[0, 1], T[0, 0])
+    q[k0 + 1] = math.asin(min(1.0, max(-1.0, T[0, 2])))
+    q[k0] = math.atan2(-T[1, 2], T[2, 2])
+    q[k0 + 2] = math.atan2(-T[0, 1], T[0, 0])
 
 
 @njit(cache=True, error_model="numpy")
@@ -351,11 +373,11 @@ def _set_twist(tw, k, R, a, C, c, revolute):
 def _s_axes(R, A, T, q1, out):
     """The S joint's three axes at the pose, R (rotation before the joint) times A e1, A Rx(q1) e2,
     A Rx(q1) Ry(q2) e3 (the last is A T[:, 2]); out (3, 3) rows. cos q1, sin q1 from T[:, 2] = [s2, -s1 c2, c1 c2]."""
-    c2 = np.sqrt(T[1, 2] * T[1, 2] + T[2, 2] * T[2, 2])
+    c2 = math.sqrt(T[1, 2] * T[1, 2] + T[2, 2] * T[2, 2])
     if c2 > 1e-9:
         c1, s1 = T[2, 2] / c2, -T[1, 2] / c2
     else:
-        c1, s1 = np.cos(q1), np.sin(q1)
+        c1, s1 = math.cos(q1), math.sin(q1)
     for i in range(3):
         v0 = A[i, 0]
         v1 = A[i, 1] * c1 + A[i, 2] * s1
@@ -492,14 +514,14 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 al = 2.0 * (d0 * vp0 + d1 * vp1 + d2 * vp2)
                 be = 2.0 * (d0 * vx0 + d1 * vx1 + d2 * vx2)
                 ka = d0 * d0 + d1 * d1 + d2 * d2 + vp0 * vp0 + vp1 * vp1 + vp2 * vp2 - l2
-                rho = np.sqrt(al * al + be * be)
+                rho = math.sqrt(al * al + be * be)
                 if rho > 0.0 and abs(ka) <= rho:
-                    q0 = np.arctan2(be, al) - f_leg[l, 1] * np.arccos(ka / rho)
+                    q0 = math.atan2(be, al) - f_leg[l, 1] * math.acos(ka / rho)
                     if q0 > np.pi:
                         q0 -= 2.0 * np.pi
                     elif q0 <= -np.pi:
                         q0 += 2.0 * np.pi
-                    cq, sq = np.cos(q0), np.sin(q0)
+                    cq, sq = math.cos(q0), math.sin(q0)
                     # C - E(q0), turned back by the crank
                     x0 = Ct3[0] - (a0 + vw * a_u[0] + cq * vp0 + sq * vx0)
                     x1 = Ct3[1] - (a1 + vw * a_u[1] + cq * vp1 + sq * vx1)
@@ -544,10 +566,10 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                     ri = Ct3[i] - c_S[i]
                     b += a_u[i] * ri
                     rr += ri * ri
-                    L2 += (c_U[i] - c_S[i]) ** 2
+                    L2 += (c_U[i] - c_S[i]) * (c_U[i] - c_S[i])
                 disc = b * b - rr + L2
                 if disc >= 0.0:
-                    q[0] = b - f_leg[l, 1] * np.sqrt(disc)
+                    q[0] = b - f_leg[l, 1] * math.sqrt(disc)
                     for i in range(3):
                         w3[i] = Ct3[i] - c_S[i] - a_u[i] * q[0]               # d now (B -> C)
                         z3[i] = c_U[i] - c_S[i]                               # d at home
@@ -591,7 +613,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                     w3[i] = Ct3[i] - c_U[i]
                     L0 += z3[i] * z3[i]
                     Lw += w3[i] * w3[i]
-                L0, Lw = np.sqrt(L0), np.sqrt(Lw)
+                L0, Lw = math.sqrt(L0), math.sqrt(Lw)
                 if Lw > 0.0:
                     for i in range(3):
                         z3[i] /= L0
@@ -639,7 +661,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
             if (i_n[l, 7] == 1 or i_n[l, 7] == 2) and not numeric_only:
                 if closed:
                     # the orientation holds by construction (R_nd is the product); check the position
-                    res = np.sqrt((Ct3[0] - C[0]) ** 2 + (Ct3[1] - C[1]) ** 2 + (Ct3[2] - C[2]) ** 2)
+                    d0, d1, d2 = Ct3[0] - C[0], Ct3[1] - C[1], Ct3[2] - C[2]
+                    res = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                     closed = res < TOL
                 if not closed:
                     for k in range(ndm):
@@ -648,7 +671,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 for it in range(MAX_ITER):
                     _forward(l, q, i_n, dkind, daxis, dpoint, Rp, tp, Rk, tk)
                     res = _end_error(l, i_n, cen, Rp, tp, Rt3, Ct3, C, e, Rend, Rerr, R_home)
-                    if not (res > TOL * 1e-2 and np.isfinite(res)):
+                    if not (res > TOL * 1e-2 and math.isfinite(res)):
                         break
                     _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw, tk)
                     # least-squares step (pinv): normal equations, J (6, nd) = tw^T
@@ -670,7 +693,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                             Mn[a, a] += 1e-13 * tr
                         if not _chol(Mn, Lf, nd):
                             break
-                        _chol_solve(Lf, rhs, y, nd)
+                        _chol_forward(Lf, rhs, y, nd)
+                        _chol_back(Lf, y, nd)
                         for a in range(nd):
                             rhs[a] = y[a]
                     else:
@@ -687,7 +711,8 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                             Mn[a, a] += 1e-13 * tr
                         if not _chol(Mn, Lf, 6):
                             break
-                        _chol_solve(Lf, e, y, 6)
+                        _chol_forward(Lf, e, y, 6)
+                        _chol_back(Lf, y, 6)
                         for k in range(nd):
                             acc = 0.0
                             for i in range(6):
@@ -737,7 +762,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 d0 = cen_out[l, jp, en, 0] - cen_out[l, jp, s, 0]
                 d1 = cen_out[l, jp, en, 1] - cen_out[l, jp, s, 1]
                 d2 = cen_out[l, jp, en, 2] - cen_out[l, jp, s, 2]
-                ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                ln = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 len_out[l, jp, m] = ln
                 li = 1.0 / ln
                 z0, z1, z2 = d0 * li, d1 * li, d2 * li
@@ -747,7 +772,7 @@ def _ik_range(tab, R_t, C_t, numeric_only, full, p0, p1, q_out, res_out, ok_out,
                 x2 = Rp[body, 2, 0] * xa0 + Rp[body, 2, 1] * xa1 + Rp[body, 2, 2] * xa2
                 xz = x0 * z0 + x1 * z1 + x2 * z2
                 x0, x1, x2 = x0 - xz * z0, x1 - xz * z1, x2 - xz * z2
-                xi = 1.0 / np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+                xi = 1.0 / math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
                 x0, x1, x2 = x0 * xi, x1 * xi, x2 * xi
                 lR_out[l, jp, m, 0, 0], lR_out[l, jp, m, 1, 0], lR_out[l, jp, m, 2, 0] = x0, x1, x2
                 lR_out[l, jp, m, 0, 1] = z1 * x2 - z2 * x1
@@ -771,7 +796,7 @@ def _null_basis(tw, passive, nd, Nb, Aw, Vr, vn):
         nrm = 0.0
         for i in range(j, 6):
             nrm += Aw[i, j] * Aw[i, j]
-        nrm = np.sqrt(nrm)
+        nrm = math.sqrt(nrm)
         for i in range(6):
             Vr[j, i] = Aw[i, j] if i >= j else 0.0
         Vr[j, j] += nrm if Aw[j, j] >= 0.0 else -nrm
@@ -834,14 +859,14 @@ def _link_form(cantilever, L, lk_p, l, k, shear, lR, jp, r, Nb, m, Ae, ns, V):
 def _ladder_c(F, n, Fs, ds):
     """Axial tangent compliance d delta / dF of a force ladder (Fs, ds)[:n] at F, floored at Fs[0]
     (chain_model.ladder_compliance: piecewise power law, end segments continued)."""
-    x = np.log(max(F, Fs[0]))
+    x = math.log(max(F, Fs[0]))
     k = 0
     for i in range(1, n - 1):
-        if np.log(Fs[i]) < x:
+        if math.log(Fs[i]) < x:
             k = i
-    lf = np.log(Fs[k])
-    pk = (np.log(ds[k + 1]) - np.log(ds[k])) / (np.log(Fs[k + 1]) - lf)
-    return pk * np.exp(np.log(ds[k]) + pk * (x - lf)) / np.exp(x)
+    lf = math.log(Fs[k])
+    pk = (math.log(ds[k + 1]) - math.log(ds[k])) / (math.log(Fs[k + 1]) - lf)
+    return pk * math.exp(math.log(ds[k]) + pk * (x - lf)) / math.exp(x)
 
 
 @njit(cache=True, error_model="numpy")
@@ -857,7 +882,7 @@ def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, sca
     for j in range(ml_i.shape[1]):
         if ml_i[l, j, 0] < 0 or (ml_n[l, j] > 0) != (which == 1):
             continue
-        dz = np.sqrt(cl[j] / ml_S[l, j, 2, 2]) if which == 1 else 1.0
+        dz = math.sqrt(cl[j] / ml_S[l, j, 2, 2]) if which == 1 else 1.0
         R = lR[l, p, ml_i[l, j, 1]]
         c = ml_i[l, j, 0]
         r0 = C[l, p, 0] - cen[l, p, c, 0]
@@ -952,9 +977,12 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
     mode = np.zeros(L, np.int64)
     c_hp = np.zeros(L)
     kh = np.zeros((L, hp.shape[1]))
+    kh_floor = np.zeros((L, hp.shape[1]))   # the Hertz point stiffness at the floor force, where every pose starts
+    for l in range(L):
+        for j in range(i_n[l, 4] if detailed else 0):
+            kh_floor[l, j] = hertz(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
     Ai = np.zeros((6, 6))
     Lf = np.zeros((6, 6))
-    ev = np.zeros(6)
     xv = np.zeros(6)
     xi = np.zeros(6)
     K0 = np.zeros((6, 6))
@@ -996,7 +1024,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                 d0 = C[l, jp, 0] - cen[l, jp, o, 0]
                 d1 = C[l, jp, 1] - cen[l, jp, o, 1]
                 d2 = C[l, jp, 2] - cen[l, jp, o, 2]
-                dn = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                dn = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                 m = 1
                 Nb[l, 0, 0], Nb[l, 1, 0], Nb[l, 2, 0] = d0 / dn, d1 / dn, d2 / dn
                 Nb[l, 3, 0] = Nb[l, 4, 0] = Nb[l, 5, 0] = 0.0
@@ -1083,7 +1111,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
             nhp = i_n[l, 4] if detailed else 0
             c_hp[l] = 0.0
             for j in range(nhp):
-                kh[l, j] = hertz(hp[l, j, 2], hp[l, j, 0], hp[l, j, 1])
+                kh[l, j] = kh_floor[l, j]
                 c_hp[l] += scale[p, l, k_hp] / kh[l, j]
             if nhp > 0:
                 any_hp = True
@@ -1095,12 +1123,12 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
             if nhp > 0 and m == 1:
                 mode[l] = 1
                 a1[l] = A0[0, 0]
-                b1[l] = Nb[l, 0, 0] ** 2 + Nb[l, 1, 0] ** 2 + Nb[l, 2, 0] ** 2
+                b1[l] = Nb[l, 0, 0] * Nb[l, 0, 0] + Nb[l, 1, 0] * Nb[l, 1, 0] + Nb[l, 2, 0] * Nb[l, 2, 0]
                 continue
             mode[l] = 2 if nhp > 0 else 0
             if not _chol(A0, Lf, m):
                 return -1 - p
-            _chol_inverse(Lf, Mt, ev, xv, m)
+            _chol_inverse(Lf, Mt, m)
             for a in range(m):
                 for b in range(m):
                     Mi[l, a, b] = Mt[a, b]
@@ -1168,7 +1196,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                             A0[a, b] = acc
                     if not _chol(A0, Lf, m):
                         return -1 - p
-                    _chol_inverse(Lf, Mt, ev, xv, m)
+                    _chol_inverse(Lf, Mt, m)
                     for a in range(m):
                         for b in range(m):
                             Mi[l, a, b] = Mt[a, b]
@@ -1178,7 +1206,8 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                     K[j, i] = K[i, j]
             if not _chol(K, Lf, 6):
                 return -1 - p
-            _chol_solve(Lf, wv, t, 6)
+            _chol_forward(Lf, wv, t, 6)
+            _chol_back(Lf, t, 6)
             if not any_hp:
                 break
             # the force on each leg's Hertz point contacts: |N[:3] y| with W_C = N y
@@ -1191,7 +1220,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                     acc = 0.0
                     for i in range(6):
                         acc += E[l, i, 0] * t[i]
-                    F = abs(k1[l] * acc) * np.sqrt(b1[l])
+                    F = abs(k1[l] * acc) * math.sqrt(b1[l])
                 elif mode[l] == 3:
                     m = mm[l]
                     for a in range(m):
@@ -1205,7 +1234,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                             for b in range(m):
                                 acc += Nb[l, k, a] * Mi[l, a, b] * z[b]
                         Ht[k] = acc   # the leg's force W_C[:3]
-                    F = np.sqrt(Ht[0] * Ht[0] + Ht[1] * Ht[1] + Ht[2] * Ht[2])
+                    F = math.sqrt(Ht[0] * Ht[0] + Ht[1] * Ht[1] + Ht[2] * Ht[2])
                     for j in range(ml_i.shape[1]):
                         if ml_n[l, j] > 0:   # the joint's axial force: along its link's z axis
                             R = lR[l, p, ml_i[l, j, 1]]
@@ -1225,7 +1254,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                     for k in range(3):
                         fk = Ht[k] - (Q3[l, k, 0] * YHt[0] + Q3[l, k, 1] * YHt[1] + Q3[l, k, 2] * YHt[2])
                         F2 += fk * fk
-                    F = np.sqrt(F2)
+                    F = math.sqrt(F2)
                 c_hp[l] = 0.0
                 for j in range(i_n[l, 4]):
                     k_new = hertz(max(F, hp[l, j, 2]), hp[l, j, 0], hp[l, j, 1])
@@ -1245,7 +1274,7 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
             t_out[p, i] = t[i]
             for j in range(6):
                 K_out[p, i, j] = K[i, j]
-        _chol_inverse(Lf, Mt, ev, xv, 6)
+        _chol_inverse(Lf, Mt, 6)
         for i in range(6):
             for j in range(6):
                 S_out[p, i, j] = Mt[i, j]
@@ -1311,7 +1340,8 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                         acc += yv[l, a] * Ae[l, s, a, b] * yv[l, b]
                 energy_out[p, l, slot_kind[l, s]] += acc
             if detailed and i_n[l, 4] > 0:
-                F2 = WC_out[p, l, 0] ** 2 + WC_out[p, l, 1] ** 2 + WC_out[p, l, 2] ** 2
+                F2 = (WC_out[p, l, 0] * WC_out[p, l, 0] + WC_out[p, l, 1] * WC_out[p, l, 1]
+                      + WC_out[p, l, 2] * WC_out[p, l, 2])
                 for j in range(i_n[l, 4]):
                     energy_out[p, l, k_hp] += F2 * scale[p, l, k_hp] / kh[l, j]
     return 0
@@ -1332,11 +1362,11 @@ def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
         j = p - p0
         x, y, z = P[p, 3], P[p, 4], P[p, 5]
         th2 = x * x + y * y + z * z
-        th = np.sqrt(th2)
+        th = math.sqrt(th2)
         if th < 1e-8:
             a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
         else:
-            a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th ** 2
+            a, b = math.sin(th) / th, (1.0 - math.cos(th)) / (th * th)
         Kx[0, 0], Kx[0, 1], Kx[0, 2] = 0.0, -z, y
         Kx[1, 0], Kx[1, 1], Kx[1, 2] = z, 0.0, -x
         Kx[2, 0], Kx[2, 1], Kx[2, 2] = -y, x, 0.0
