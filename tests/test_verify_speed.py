@@ -32,7 +32,8 @@ def case():
 
 
 #: a mesh of the ball in its seat far coarser than the study's (TILT_SIZE_M = 2 mm), so the whole-mesh solve is quick
-COARSE_TILT_SIZE_M = 0.006
+#: (at 6 mm the condensed band holds too few contact nodes and its Newton stalls with a ConvergenceError)
+COARSE_TILT_SIZE_M = 0.005
 
 
 @pytest.mark.slow   # the whole-mesh solve: 55 s frictionless, 280 s with friction at load 9 (the default suite keeps
