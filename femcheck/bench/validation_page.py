@@ -19,6 +19,9 @@ BENCH_DIR = ROOT / "reports" / "bench"
 PAGE = ROOT / "docs" / "validation.md"
 
 #: keys describing the machine, shown in the section's header line rather than in its table
+#: figure/value pairs in one table row
+FIGURES_PER_ROW = 4
+
 MACHINE_KEYS = ("machine", "machine_cpus", "machine_python", "machine_blas_threads", "load_average", "bench_wall_s")
 
 
@@ -131,12 +134,13 @@ def render(figures: dict[str, dict]) -> str:
         summary = _summary(area)
         lines += [(summary + " " if summary else "") + f"Command: `python -m femcheck.bench {area}`. Machine: {machine}."
                   + (f" Wall time of the area: {format_value(fig['bench_wall_s'])} s." if "bench_wall_s" in fig else ""),
-                  "", "| figure | value | figure | value | figure | value |", "| --- | --- | --- | --- | --- | --- |"]
+                  "", "| figure | value " * FIGURES_PER_ROW + "|", "| --- | --- " * FIGURES_PER_ROW + "|"]
         cells = [_cell(k, v) for k, v in fig.items() if k not in MACHINE_KEYS and is_figure(v)]
         detail = [k for k, v in fig.items() if k not in MACHINE_KEYS and not is_figure(v)]
-        # three figures per row, in the JSON's order down the rows: the page stays short for the big areas
-        lines += ["| " + " | ".join(group) + " | |" * (3 - len(group)) + " |"
-                  for group in (cells[i:i + 3] for i in range(0, len(cells), 3))]
+        # several figures per row, in the JSON's order down the rows: the page stays short for the big areas
+        n = FIGURES_PER_ROW
+        lines += ["| " + " | ".join(group) + " | |" * (n - len(group)) + " |"
+                  for group in (cells[i:i + n] for i in range(0, len(cells), n))]
         if detail:
             lines += ["", "Per-case detail in the JSON: " + ", ".join(f"`{k}`" for k in detail) + "."]
         lines.append("")
