@@ -26,15 +26,27 @@ This module builds the same arm from data that no VJM chose:
 * **Output bearings.** The joint's only output bearing (the actuator's integrated output bearing carries all
   external loads; same manual, sec. 6.21), at its real axial place: pitch diameter ``dp`` and offset ``R`` of the
   bearing centre behind the output flange from table 55.1 (size 32: 0.114 / 0.020 m, size 25: 0.088 / 0.018 m,
-  size 17: 0.058 / 0.014 m; static load rating C0 = 59.0, 45.0 and 17.1 kN). It is a ring of rolling elements
-  in a 90-degree V groove (crossed rollers at +-45 degrees; size 17's four-point ball bearing is treated the
-  same way): each element a line contact of steel on steel at both rings, ``k_n = pi l E* / 4`` (two contacts
-  ``pi l E*/2`` in series, :func:`femcheck.compliance.hertz_line_contact.line_contact_stiffness`). The element
-  size comes from the catalogue's C0 through ISO 76's static rating of a roller bearing,
-  ``C0 = 44 (1 - D cos a / dp) z l D cos a`` with ``l = D`` (crossed rollers are as long as they are thick),
-  ``a = 45 deg`` and ``z = pi dp / (1.25 D)`` (a spacer between rollers). Summed over the ring the elements
-  give radial ``z k_n / 4``, axial ``z k_n / 2`` and tilt ``axial dp^2 / 8`` (:meth:`Bearing.crossed_roller`):
-  radial and axial springs at their real places, whose tilt stiffness follows from their pitch circle.
+  size 17: 0.058 / 0.014 m; static load rating C0 = 59.0, 45.0 and 17.1 kN; bearing type C, crossed rollers,
+  for sizes 25 and 32, F, four-point contact, for size 17). Its stiffness is the catalogue's **tilting moment
+  stiffness** K_B of the output bearing of the same gear: the manual's own K_B row of table 55.1 could not be
+  read, so K_B is taken from Harmonic Drive AG, *Engineering data SHG-2UH / 2SO / 2SH units* 1021387 12/2018,
+  table 23.1 "Tilting moment stiffness K_B [Nm/arcmin]" (average values): size 32: 290, size 25: 114, size 17:
+  45 N m/arcmin. The SHG is the gear of the CHA (the CHA's torsion table above is the SHG's, ratio 80 and up)
+  and its unit has a crossed-roller output bearing of nearly the CHA's pitch circle (0.111, 0.085, 0.060 m).
+  The same values are in Harmonic Drive Systems, *AC Servo Actuator SHA SG and CG series manual*, sec. 2-3,
+  table 1 "Specifications of the cross roller bearings", moment stiffness Km of SHA32A-SG / SHA25A-SG (SG: the
+  SHG gear; dp 111 / 85 mm, C0 65.4 / 35.8 kN): 100 and 39.2 x 10^4 N m/rad = 291 and 114 N m/arcmin.
+  The bearing is a ring of rolling elements at +-45 degrees on the pitch circle (:meth:`Bearing.crossed_roller`):
+  summed over the ring they give radial ``z k / 4``, axial ``z k / 2`` and tilt ``axial dp^2 / 8``, so K_B
+  sets the ring: axial ``8 K_B / dp^2``, radial half of that, tilt K_B, as radial and axial springs at the
+  bearing's place. For size 17 a crossed-roller K_B stands for the CHA's four-point ball bearing of about the
+  same size (C0 17.1 against 16.3 kN); point contacts are softer than line contacts, so it is an upper bound.
+* **The line-contact estimate** (``bearing_stiffness="line_contact"``, the variant the catalogue value
+  replaces): each element a line contact of steel on steel at both rings, ``k_n = pi l E* / 4`` (two contacts
+  ``pi l E*/2`` in series, :func:`femcheck.compliance.hertz_line_contact.line_contact_stiffness`), the element
+  size from the catalogue's C0 through ISO 76's static rating of a roller bearing,
+  ``C0 = 44 (1 - D cos a / dp) z l D cos a`` with ``l = D``, ``a = 45 deg`` and ``z = pi dp / (1.25 D)`` (a
+  spacer between rollers). Rigid rings, no housing: 18-23 times stiffer in tilt than the catalogue's K_B.
 * **Interfaces.** The output flange of each joint sits where the next housing begins: along the roll joints'
   axes 0.15, 0.21, 0.21 and 0.081 m from the joint-frame origin (A1, A3, A5, A7: the joint origins of the
   iiwa 7's public description); for the pitch joints A2, A4, A6 at the outer radius of the housing tube that
@@ -56,16 +68,14 @@ How seed 002's protocol is read (sec. IV-A), choice by choice:
 * **Drives.** The catalogue's piecewise law, not one "nominal" value: the law is cited data, and a constant
   spring per joint is what both VJMs assume. :func:`with_nominal_drives` gives the seed's linear FE reading
   (constant K3, the stiffness the actuator tables list alone) as a variant.
-* **Bearings.** The ISO 76 / line-contact estimate above. The catalogue's own tilting-moment stiffness of the
-  output bearing (table 55.1, K_B) would replace it, with the axial springs on the pitch circle set to give it;
-  that value is not in femcheck's data, so it is not used. The estimate is stiffer than a mounted bearing; how
-  far the result depends on it is bracketed with :func:`with_softer_structure` (the halving of the conventional
-  error needs bearings about 37 times softer).
-* **Links and housings.** The beam world's tubes (:func:`cobot7_world`), femcheck's choice, bracketed the same way
-  (the halving needs tubes about 4.9 times softer).
+* **Bearings.** The catalogue's tilting moment stiffness K_B (above), the stiffness the manufacturer states for
+  the mounted output bearing, with radial and axial springs of the same ring. How far the result depends on it
+  is bracketed with :func:`with_softer_structure` (the halving of the conventional error needs bearings about
+  1.85 times softer than K_B).
+* **Links and housings.** The beam world's tubes (:func:`cobot7_world`), femcheck's choice (not cited data),
+  bracketed the same way (the halving needs tubes about 2.8 times softer).
 
-The idealizations (rigid bearing rings, load-independent line contact, no clearance or preload dependence) make
-the bearings stiffer than a mounted catalogue bearing.
+Left out: clearance and preload dependence of the bearings (K_B is an average value).
 The drives' hysteresis loss and lost motion (listed beside the stiffness, up to 1 arcmin each) are left out:
 the law is the catalogue's one curve for loading in both directions.
 """
@@ -88,17 +98,25 @@ ISO76_ROLLER_FACTOR = 44.0
 SPACING = 1.25
 
 
+#: one arcminute, rad (the catalogues list K_B in N m/arcmin)
+ARCMIN = math.pi / (180.0 * 60.0)
+#: how the output bearings' stiffness is set (module docstring): the catalogue's K_B, or the line-contact estimate
+BEARING_STIFFNESS = ("catalogue", "line_contact")
+
+
 @dataclass(frozen=True)
 class JointModule:
     """Catalogue data of one joint size (module docstring): ``size`` (gear size), ``torsion`` (the gear's
     piecewise torsion law: T1, T2, K1, K2, K3), ``pitch_diameter_m`` (dp), ``flange_offset_m`` (R, bearing
-    centre to output flange), ``static_rating_N`` (C0)."""
+    centre to output flange), ``static_rating_N`` (C0), ``moment_stiffness_Nm_per_rad`` (K_B, the output
+    bearing's tilting moment stiffness, N m/rad)."""
 
     size: int
     torsion: StrainWaveTorsion
     pitch_diameter_m: float
     flange_offset_m: float
     static_rating_N: float
+    moment_stiffness_Nm_per_rad: float
 
     @property
     def torsion_Nm_per_rad(self) -> float:
@@ -120,33 +138,46 @@ class JointModule:
         """Rolling elements on the pitch circle (even: half at +45, half at -45 degrees)."""
         return 2 * int(math.pi * self.pitch_diameter_m / (SPACING * self.element_diameter_m) / 2)
 
-    def bearing(self, offset_m: float, mass_kg: float = 0.0) -> Bearing:
-        """The output bearing (radial, axial and, from its pitch circle, tilt springs) with the drive's torsion."""
-        E_star = effective_modulus(*STEEL, *STEEL)
-        k_n = float(line_contact_stiffness(self.element_diameter_m, E_star)) / 2   # two contacts in series
-        z = self.element_count
-        b = Bearing.crossed_roller(self.torsion_Nm_per_rad, self.pitch_diameter_m, axial_N_per_m=z * k_n / 2,
-                                   radial_N_per_m=z * k_n / 4, offset_m=offset_m, mass_kg=mass_kg)
+    def bearing(self, offset_m: float, mass_kg: float = 0.0, stiffness: str = "catalogue") -> Bearing:
+        """The output bearing with the drive's torsion: a ring of +-45-degree elements whose total axial stiffness
+        ``k_a`` gives radial ``k_a / 2`` and tilt ``k_a dp^2 / 8``. ``stiffness="catalogue"``: ``k_a = 8 K_B /
+        dp^2``, so the tilt is the catalogue's K_B; ``"line_contact"``: ``k_a = z k_n / 2`` of ISO 76 elements in
+        steel line contact (module docstring)."""
+        if stiffness == "catalogue":
+            axial = 8.0 * self.moment_stiffness_Nm_per_rad / self.pitch_diameter_m**2
+        elif stiffness == "line_contact":
+            E_star = effective_modulus(*STEEL, *STEEL)
+            k_n = float(line_contact_stiffness(self.element_diameter_m, E_star)) / 2   # two contacts in series
+            axial = self.element_count * k_n / 2
+        else:
+            raise ValueError(f"bearing stiffness {stiffness!r}; expected one of {', '.join(BEARING_STIFFNESS)}")
+        b = Bearing.crossed_roller(self.torsion_Nm_per_rad, self.pitch_diameter_m, axial_N_per_m=axial,
+                                   radial_N_per_m=axial / 2, offset_m=offset_m, mass_kg=mass_kg)
         return dataclasses.replace(b, torsion_curve=self.torsion)
 
 
 #: Harmonic Drive CHA engineering data 1018854 08/2018 (module docstring): torsion law (T1, T2 in N m;
-#: K1, K2, K3 in N m/rad, ratio > 50), dp, R, C0
-CHA_MODULES = {32: JointModule(32, StrainWaveTorsion((29.0, 108.0), (67e3, 110e3, 120e3)), 0.114, 0.020, 59000.0),
-               25: JointModule(25, StrainWaveTorsion((14.0, 48.0), (31e3, 50e3, 57e3)), 0.088, 0.018, 45000.0),
-               17: JointModule(17, StrainWaveTorsion((3.9, 12.0), (10e3, 14e3, 16e3)), 0.058, 0.014, 17100.0)}
+#: K1, K2, K3 in N m/rad, ratio > 50), dp, R, C0; K_B from the SHG-2UH engineering data 1021387 12/2018,
+#: table 23.1 (290, 114, 45 N m/arcmin)
+CHA_MODULES = {32: JointModule(32, StrainWaveTorsion((29.0, 108.0), (67e3, 110e3, 120e3)), 0.114, 0.020, 59000.0,
+                               290.0 / ARCMIN),
+               25: JointModule(25, StrainWaveTorsion((14.0, 48.0), (31e3, 50e3, 57e3)), 0.088, 0.018, 45000.0,
+                               114.0 / ARCMIN),
+               17: JointModule(17, StrainWaveTorsion((3.9, 12.0), (10e3, 14e3, 16e3)), 0.058, 0.014, 17100.0,
+                               45.0 / ARCMIN)}
 #: joint sizes A1..A7 (seed 002: Joint32, Joint25, Joint17 from the shoulder to the wrist)
 COBOT7_SIZES = (32, 32, 25, 25, 17, 17, 17)
 #: output flange places along each joint axis from the joint-frame origin, m (module docstring)
 COBOT7_FLANGE_M = (0.15, 0.070, 0.21, 0.060, 0.21, 0.050, 0.081)
 
 
-def cobot7_bearings_world(case, **overrides) -> BeamWorld:
+def cobot7_bearings_world(case, bearing_stiffness: str = "catalogue", **overrides) -> BeamWorld:
     """The bearings world of ``cases/cobot7.toml`` (module docstring): the beam world's tubes, tool and drive
-    masses with catalogue drives and output bearings at their real places. ``overrides`` replace
-    :class:`BeamWorld` fields."""
+    masses with catalogue drives and output bearings at their real places. ``bearing_stiffness``: the
+    catalogue's K_B (the world) or ``"line_contact"`` (the estimate it replaces, a variant). ``overrides``
+    replace :class:`BeamWorld` fields."""
     base = cobot7_world(case)
-    bearings = tuple(CHA_MODULES[s].bearing(flange - CHA_MODULES[s].flange_offset_m, b.mass_kg)
+    bearings = tuple(CHA_MODULES[s].bearing(flange - CHA_MODULES[s].flange_offset_m, b.mass_kg, bearing_stiffness)
                      for s, flange, b in zip(COBOT7_SIZES, COBOT7_FLANGE_M, base.bearings))
     world = dataclasses.replace(base, bearings=bearings)
     return dataclasses.replace(world, **overrides) if overrides else world
