@@ -98,3 +98,27 @@ def test_chained_constraints_and_errors():
     with pytest.raises(ValueError, match="collinear"):
         C.distributing_coupling(9 + 6, np.arange(9, 15), [0, 0, 0], [[0, 0, 0], [1, 0, 0], [2, 0, 0]],
                                 np.arange(9).reshape(3, 3))
+
+
+def test_follow_moves_dofs_with_their_leader_and_carries_its_force():
+    # three unit springs in parallel between the clamped DOFs 0..2 and the DOFs 3..5, which follow the leader 6
+    # with offsets b; a force F on the leader: u_6 = F / 3 (springs in parallel) and u_i = u_6 + b_i exactly
+    ndof, F = 7, 3.0
+    b = np.array([0.0, 1e-3, -2e-3])
+    c = C.combine(C.clamp(ndof, [0, 1, 2]), C.follow(ndof, [3, 4, 5], 6, b))
+    assert c.free.tolist() == [6]
+    K = np.zeros((ndof, ndof))
+    for i in range(3):
+        K[np.ix_([i, i + 3], [i, i + 3])] += [[1.0, -1.0], [-1.0, 1.0]]
+    f = np.zeros(ndof)
+    f[6] = F
+    T = c.T.toarray()
+    q = np.linalg.solve(T.T @ K @ T, T.T @ (f - K @ c.g))
+    u = T @ q + c.g
+    # reduced equilibrium Tᵀ K T q = Tᵀ (f − K g): the offsets shift the springs' lengths, their sum Σ b_i = −1e-3
+    # pulls the leader by +1e-3 / 3 on top of F / 3 (exact arithmetic, rounding only)
+    assert u[6] == pytest.approx(F / 3 - b.sum() / 3, rel=1e-14)
+    assert u[3:6] == pytest.approx(u[6] + b, rel=1e-14, abs=1e-18)
+    assert u[:3] == pytest.approx(0.0, abs=0)
+    with pytest.raises(ValueError, match="cyclic"):  # a DOF cannot follow itself
+        C.follow(ndof, [6], 6)

@@ -79,6 +79,7 @@ def hertz_deck(level: str = LEVEL, loads=None, penalty_factor: float | None = No
     "loads", "overlap_m"}."""
     from femcheck.fe import calculix as cx
     from femcheck.fe.checks import hertz_sphere as hs
+    from femcheck.fe.checks._hertz_model import contact_facets
     from femcheck.fe.contact.half_space import boussinesq
 
     loads = tuple(hs.LOADS_N if loads is None else loads)
@@ -101,7 +102,7 @@ def hertz_deck(level: str = LEVEL, loads=None, penalty_factor: float | None = No
     outer = np.isclose(X[:, 0], L, atol=tol) | np.isclose(X[:, 1], L, atol=tol) | (np.abs(X[:, 2] + overlap * body) > L - tol)
     sym_x, sym_y = np.isclose(X[:, 0], 0.0, atol=tol), np.isclose(X[:, 1], 0.0, atol=tol)
     # contact surfaces (as hertz_sphere.build): slave = the upper body's curved bottom, master = the block's top
-    slave, master = hs.contact_facets(mesh, n_lower, tol)
+    slave, master = contact_facets(mesh, n_lower, tol)
     s_el, s_face = cx.facet_faces(mesh, m10, slave)
     m_el, m_face = cx.facet_faces(mesh, m10, master)
     face_nodes = []

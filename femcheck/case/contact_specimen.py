@@ -94,7 +94,6 @@ class Identification:
 class ContactSpecimenCase(CaseRecord):
     """A validated contact-identification case. Immutable; variants via :meth:`with_params`."""
 
-    meta: Meta
     materials: tuple[Material, ...]
     bar: BarSection
     specimen: SpecimenSection

@@ -297,7 +297,6 @@ class LegSpec:
 class ParallelDeviceCase(CaseRecord):
     """A validated parallel device case. Immutable; the resolved legs are :attr:`device`."""
 
-    meta: Meta
     model: ModelOptions
     materials: tuple[Material, ...]
     platform: Platform

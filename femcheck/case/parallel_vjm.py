@@ -104,7 +104,6 @@ class TestPoint:
 class ParallelVJMCase(CaseRecord):
     """A validated parallel VJM case. Immutable."""
 
-    meta: Meta
     geometry: Geometry
     links: Links
     fitting: Fitting

@@ -219,10 +219,12 @@ class CaseVariants:
 
 @dataclasses.dataclass(frozen=True)
 class CaseRecord(CaseVariants):
-    """Base of every case object: where it came from (``source``), the sha256 of its parsed document and the
-    document as JSON (filled in by :func:`femcheck.case.registry.build_case`; keyword-only, so a kind's own
-    required fields come first), and :meth:`with_params`."""
+    """Base of every case object: its ``[meta]`` table (:class:`CaseMeta`, the first field of every kind), where it
+    came from (``source``), the sha256 of its parsed document and the document as JSON (filled in by
+    :func:`femcheck.case.registry.build_case`; keyword-only, so a kind's own required fields come next), and
+    :meth:`with_params`."""
 
+    meta: CaseMeta
     source: str = dataclasses.field(default="", kw_only=True)
     sha256: str = dataclasses.field(default="", kw_only=True)
     raw_json: str = dataclasses.field(default="", repr=False, kw_only=True)

@@ -150,7 +150,6 @@ class Identification:
 class SerialRobotCase(CaseRecord):
     """A validated serial-robot VJM case. Immutable."""
 
-    meta: Meta
     model: ModelOptions
     kinematics: Kinematics
     joints: tuple[Joint, ...]

@@ -148,7 +148,6 @@ class DiagnosisOptions:
 class SerialTreeCase(CaseRecord):
     """A validated serial-tree case. Immutable; ``tree`` is the array form used by every computation."""
 
-    meta: Meta
     kinematics: TreeKinematics
     gravity: Gravity
     joints: tuple[TreeJoint, ...]

@@ -14,6 +14,8 @@ admissible displacements). Reactions at the dependent DOFs are r = K u − f.
 Builders:
 
 * :func:`clamp` — prescribed values (0 for a clamp, a settlement/displacement control otherwise).
+* :func:`follow` — DOFs that move with one leader DOF, u_i = u_leader + b_i (a face translating rigidly along
+  one axis with an extra unknown).
 * :func:`rigid_coupling` (RBE2) — slave translations follow a 6-DOF reference node as a rigid body,
   u_i = u_r + θ_r × (x_i − x_r); slave rotations (beam nodes), if given, equal θ_r.
 * :func:`distributing_coupling` (RBE3) — the reference node moves as the weighted least-squares rigid
@@ -171,6 +173,14 @@ def clamp(ndof: int, dofs, values=0.0) -> Constraints:
         np.asarray(dofs, dtype=np.int64).ravel()
     vals = np.broadcast_to(np.asarray(values, dtype=float), dofs.shape).copy()
     return _from_relations(ndof, dofs, sp.csr_matrix((dofs.size, ndof)), vals)
+
+
+def follow(ndof: int, dofs, leader: int, offsets=0.0) -> Constraints:
+    """u[dofs] = u[leader] + offsets: DOFs that translate with one leader DOF (m; scalar or per DOF), e.g. a
+    block's far face moving rigidly with an extra approach unknown that carries the applied force."""
+    dofs = np.asarray(dofs, dtype=np.int64).ravel()
+    D = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), np.full(dofs.size, leader))), shape=(dofs.size, ndof))
+    return _from_relations(ndof, dofs, D, np.broadcast_to(np.asarray(offsets, dtype=float), dofs.shape))
 
 
 def _offsets(points, ref_point):

@@ -56,47 +56,26 @@ contact); the 50 N values are in detail.
 """
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
-from femcheck.compliance.hertz_point_contact import effective_modulus
 from femcheck.fe.checks import CheckResult
 from femcheck.fe.checks._graded_mesh import cored_box, dof_body, join, layer_radii, mirror_z
-from femcheck.fe.constraints import Constraints
+from femcheck.fe.checks._hertz_model import E, E_STAR, L, NU, R, HertzModel, approach_constraints, assemble
 from femcheck.fe.contact.half_space import boussinesq, hertz_axis_displacement, hertz_point
-from femcheck.fe.contact.pairing import default_penalty, pair_surfaces
-from femcheck.fe.elasticity import assemble_stiffness, vector_basis
-from femcheck.fe.newton import ContactProblem, solve_contact
+from femcheck.fe.newton import solve_contact
 
 NAME = "hertz-sphere"
 #: relative error accepted at each mesh level (``femcheck check-solver`` fails above it)
 TOLERANCE = {"coarse": 1e-2, "default": 1e-2, "fine": 1e-2}
 TOLERANCE_REASON = "mutual approach against Hertz: -0.56 / -0.24 / -0.09 % at coarse / default / fine (monotone convergence); 1 % bar"
-E, NU = 210e9, 0.3
-R = 5e-3
-L = 1.5e-3
 LOADS_N = (15.0, 50.0)
 #: fixed grading (m): uniform core radius, outer radius of the contact band (≈ 1.6 a at 50 N)
 RHO_CORE, RHO_BAND = 50e-6, 190e-6
 #: refinement factor k per level: k³ core cubes of side RHO_CORE/k, 2k band layers, 2k far-field layers
 LEVELS = {"coarse": 3, "default": 4, "fine": 5}
 GEOMETRIES = ("half-space", "sphere")
-
-
-@dataclasses.dataclass(frozen=True)
-class HertzModel:
-    """Assembled quarter model: problem, pair, basis, index of the approach DOF Δ, timings (s)."""
-
-    problem: ContactProblem
-    pair: object
-    basis: object
-    delta_dof: int
-    n_lower: int
-    assembly_s: float
-    mesh_s: float
 
 
 def sphere_profile(r):
@@ -125,18 +104,6 @@ def make_mesh(level: str, geometry: str = "half-space"):
     return join(lower, type(cube)(p, cube.t))
 
 
-def contact_facets(mesh, n_lower: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """(slave, master) boundary facet indices of the quarter model from :func:`make_mesh`: slave = the upper
-    body's bottom (curved for the sphere), master = the block's top face z = 0; facets on the symmetry planes
-    x = 0, y = 0 and on the outer faces at L (within ``tol``, m) are left out. The upper body's elements are
-    those from index ``n_lower`` on."""
-    bf = mesh.boundary_facets()
-    fc = mesh.p[:, mesh.facets[:, bf]].mean(axis=1)
-    upper_f = mesh.f2t[0, bf] >= n_lower
-    interior = (fc[0] < L - tol) & (fc[1] < L - tol) & (fc[0] > tol) & (fc[1] > tol)
-    return bf[upper_f & interior & (fc[2] < L - tol)], bf[~upper_f & interior & np.isclose(fc[2], 0.0, atol=tol)]
-
-
 def _far_field_constraints(basis, body, F, delta_dof, tol):
     """u = T q + g: symmetry planes, Boussinesq field on the truncation faces, Δ on the upper far field."""
     ndof = basis.N + 1
@@ -155,16 +122,8 @@ def _far_field_constraints(basis, body, F, delta_dof, tol):
     dep = np.flatnonzero(dep_mask)
     g = np.zeros(ndof)
     g[dep] = np.where(outer[dep], val[dep], 0.0)
-    free = np.r_[np.flatnonzero(~dep_mask), delta_dof]
-    col = np.full(ndof, -1)
-    col[free] = np.arange(free.size)
     on_delta = dep[outer[dep] & (body[dep] == 1) & (comp[dep] == 2)]
-    rows = np.r_[free, on_delta]
-    cols = np.r_[np.arange(free.size), np.full(on_delta.size, col[delta_dof])]
-    T = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(ndof, free.size))
-    D = sp.csr_matrix((np.ones(on_delta.size), (np.searchsorted(dep, on_delta), np.full(on_delta.size, delta_dof))),
-                      shape=(dep.size, ndof))
-    return Constraints(ndof=ndof, dependent=dep, free=np.sort(free), T=T, g=g, relations=(dep, D, g[dep]))
+    return approach_constraints(dep_mask, on_delta, delta_dof, g)
 
 
 def build(level: str = "default", penalty_factor: float = 100.0, F_max: float = max(LOADS_N), intorder: int = 2,
@@ -172,25 +131,15 @@ def build(level: str = "default", penalty_factor: float = 100.0, F_max: float = 
     """Mesh, assemble and pair the quarter model at refinement ``level`` for the load F_max (N)."""
     t0 = time.perf_counter()
     mesh, n_lower = make_mesh(level, geometry)
-    t1 = time.perf_counter()
-    basis = vector_basis(mesh, 2)
-    K = assemble_stiffness(basis, E, NU)
-    body = dof_body(basis, n_lower)
-    tol = 1e-9 * L
-    delta_dof = basis.N
-    C = _far_field_constraints(basis, body, F_max, delta_dof, tol)
-    f = np.zeros(basis.N + 1)
-    f[delta_dof] = -F_max / 4.0
-    slave, master = contact_facets(mesh, n_lower, tol)
-    eps = default_penalty(mesh, slave, E, penalty_factor)
-    pair = pair_surfaces(basis, slave, master, penalty_n=eps, friction=0.0, name="sphere-block", ndof=basis.N + 1,
-                         intorder=intorder)
-    if geometry == "half-space":  # Hertz: the sphere is the initial gap between two half-spaces
-        r_pts = np.hypot(pair.points[:, 0], pair.points[:, 1])
-        pair = dataclasses.replace(pair, g0=pair.g0 + sphere_profile(r_pts))
-    problem = ContactProblem(K=K, f=f, constraints=C, pairs=(pair,))
-    return HertzModel(problem=problem, pair=pair, basis=basis, delta_dof=delta_dof, n_lower=n_lower,
-                      assembly_s=time.perf_counter() - t1, mesh_s=t1 - t0)
+    mesh_s = time.perf_counter() - t0
+
+    def constrain(basis, body, delta_dof, tol):
+        return _far_field_constraints(basis, body, F_max, delta_dof, tol)
+
+    def half_space_gap(points):  # Hertz: the sphere is the initial gap between two half-spaces
+        return sphere_profile(np.hypot(points[:, 0], points[:, 1]))
+    return assemble(mesh, n_lower, constrain, -F_max / 4.0, name="sphere-block", penalty_factor=penalty_factor,
+                    intorder=intorder, initial_gap=half_space_gap if geometry == "half-space" else None, mesh_s=mesh_s)
 
 
 def solve(model: HertzModel, loads=LOADS_N, **kwargs):
@@ -232,18 +181,17 @@ def fit_hertz_pressure(r, p, a_guess: float, p_guess: float | None = None) -> tu
 
 def evaluate(model: HertzModel, result, loads=LOADS_N, depths=None) -> list[dict]:
     """Per load: Hertz closed form vs FE approach (direct and depth extraction) and contact radius."""
-    E_star = float(effective_modulus(E, NU, E, NU))
     X = model.basis.doflocs
     body = dof_body(model.basis, model.n_lower)
     on_axis = np.isclose(X[0], 0.0, atol=1e-12) & np.isclose(X[1], 0.0, atol=1e-12) & (np.arange(model.basis.N) % 3 == 2)
     if depths is None:  # axis nodes of both bodies between 3 and 8 contact radii (50 N) deep
         zs = X[2, on_axis & (body == 0)]
-        a_max = hertz_point(max(loads), E_star, R).a
+        a_max = hertz_point(max(loads), E_STAR, R).a
         depths = np.unique(np.round(-zs[(-zs >= 3 * a_max) & (-zs <= 8 * a_max)], 12))
     out = []
     r_pts = np.hypot(model.pair.points[:, 0], model.pair.points[:, 1])
     for F, step in zip(loads, result.steps):
-        h = hertz_point(F, E_star, R)
+        h = hertz_point(F, E_STAR, R)
         u = step.u
         delta = -u[model.delta_dof]
         ps = step.pairs[0]
