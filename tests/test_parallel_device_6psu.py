@@ -1,5 +1,6 @@
 """The 6-PSU reference case (cases/haptic_6psu.toml, a parallel_device written leg by leg) on the general model
-against the 6-PSU kernel run on its layout tables: the general model gives the same numbers."""
+against its five-element view ``femcheck.chain`` (the same model on the legs with the parameters derived from the
+layout tables, :func:`femcheck.chain.device_parameters`): the same numbers, element by element, and the IK."""
 from __future__ import annotations
 
 import numpy as np
@@ -13,9 +14,9 @@ from femcheck.parallel.chain_model import evaluate
 from femcheck.parallel.leg_kinematics import solve_legs
 from tests.conftest import ROOT
 
-#: the issue's bar for the 6-PSU baselines; the two codes differ only by rounding (measured ~1e-14)
+#: the 6-PSU baselines' bar; the two differ only by the rounding of the parameters' two derivations
 RTOL = 1e-9
-#: the 6-PSU kernel's element order and the names of the same elements in the parallel_device file
+#: the five-element order of femcheck.chain and the names of the same elements in the parallel_device file
 NAMES = ("guideway", "drive", "hertz_point", "proximal_link", "hertz_line")
 
 
@@ -37,7 +38,7 @@ def _poses(c6):
 @pytest.mark.parametrize("joints", ["rigid", "released"])
 @pytest.mark.parametrize("wrench", [None, [0, 0, 15, 0, 0, 0], [15, -5, 0, 0.1, 0, 0]])
 @pytest.mark.parametrize("backend", ["compiled", "numpy"])
-def test_general_model_reproduces_the_6psu_kernel(cases, model, joints, wrench, backend):
+def test_general_model_reproduces_the_6psu_chain(cases, model, joints, wrench, backend):
     c6, cp = cases
     P = _poses(c6)
     a = evaluate_6psu(c6, P, wrench, model=model, joints=joints)

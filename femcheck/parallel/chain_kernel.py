@@ -28,7 +28,7 @@ drive ``c xi xi^T``, Hertz line contact in the link frame), the leg's wrench bas
 for released joints the Householder complement of the passive twists), ``A = N^T S N``, ``E = G^T N`` and
 ``K_T = sum E A^-1 E^T``. The Hertz point contacts ``c I3`` on the translations are linearized at their leg's
 force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
-keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released
+keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses. Released
 P-S-U and U-P-S legs use their one wrench directly, the force along the line of the S and U centres.
 
 :func:`evaluate_kernel` runs both in one call over all poses, block by block (the default of
