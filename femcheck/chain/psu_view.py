@@ -56,23 +56,13 @@ class ChainAdjustments:
 
 
 @dataclasses.dataclass(frozen=True)
-class ChainResult:
-    """Result of :func:`evaluate` for n poses (SI).
-
-    K, S: (n, 6, 6) TCP stiffness and compliance (twist [d; theta] <- wrench [F; M]);
-    twist: (n, 6) TCP deflection under ``wrench`` (n, 6); chain_wrench: (n, 6, 6) wrench each chain
-    carries at its C_i; k_sp: (n, 6) Hertz stiffness of each spherical joint (NaN if not modelled);
-    element_energy: (n, 6, 5) complementary energy per chain and element (J);
-    contributions: (n, 5) share of each element type (sums to 1; NaN at zero load).
+class ChainResult(chain_model.TcpResult):
+    """Result of :func:`evaluate` for n poses (SI): :class:`~femcheck.parallel.chain_model.TcpResult` (K, S, twist
+    under ``wrench``) and chain_wrench: (n, 6, 6) wrench each chain carries at its C_i; k_sp: (n, 6) Hertz
+    stiffness of each spherical joint (NaN if not modelled); element_energy: (n, 6, 5) complementary energy per
+    chain and element (J); contributions: (n, 5) share of each element type (sums to 1; NaN at zero load).
     """
 
-    model: str
-    joints: str
-    poses: np.ndarray
-    wrench: np.ndarray
-    K: np.ndarray
-    S: np.ndarray
-    twist: np.ndarray
     chain_wrench: np.ndarray
     k_sp: np.ndarray
     element_energy: np.ndarray
@@ -86,11 +76,6 @@ class ChainResult:
         """The leg geometry of ``poses`` (:func:`femcheck.kinematics.psu6.leg_geometry`)."""
         src = self.legs_source
         return src() if callable(src) else src
-
-    def directional_stiffness(self, direction) -> np.ndarray:
-        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m (seed 000 §4.7)."""
-        from femcheck.compliance.directional import directional_stiffness
-        return directional_stiffness(self.S, direction)
 
 
 def psu_device(case, params: DeviceParameters | None = None):

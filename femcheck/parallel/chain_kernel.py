@@ -1404,6 +1404,17 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, ce
     return 0
 
 
+@njit(cache=True)
+def state_buffers(L, n, nd, nc, nl):
+    """The leg-state arrays :func:`ik_kernel` writes for n poses of L legs padded to nd freedoms, nc centres and nl
+    links: q (L, n, nd), residual (L, n), ok, closed form (L, n) bool, C (L, n, 3), centres (L, n, nc, 3), twists
+    (L, n, nd, 6), link frames (L, n, nl, 3, 3), link lengths (L, n, nl); zero (the lengths one), so that the
+    padding and what a closed form skips hold finite values."""
+    return (np.zeros((L, n, nd)), np.zeros((L, n)), np.zeros((L, n), dtype=np.bool_), np.zeros((L, n), dtype=np.bool_),
+            np.zeros((L, n, 3)), np.zeros((L, n, nc, 3)), np.zeros((L, n, nd, 6)), np.zeros((L, n, nl, 3, 3)),
+            np.ones((L, n, nl)))
+
+
 #: poses per block of the fused kernel: the block's leg state (~200 kB for six legs) stays in the cache
 BLOCK = 64
 
@@ -1457,15 +1468,7 @@ def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, P,
     B = min(BLOCK, max(n, 1))
     R_b = np.zeros((B, 3, 3))
     C_b = np.zeros((L, B, 3))
-    q = np.zeros((L, B, nd))
-    res = np.zeros((L, B))
-    ok = np.zeros((L, B), dtype=np.bool_)
-    closed = np.zeros((L, B), dtype=np.bool_)
-    C = np.zeros((L, B, 3))
-    cen = np.zeros((L, B, nc, 3))
-    tw = np.zeros((L, B, nd, 6))
-    lR = np.zeros((L, B, nl, 3, 3))
-    llen = np.ones((L, B, nl))
+    q, res, ok, closed, C, cen, tw, lR, llen = state_buffers(L, B, nd, nc, nl)
     bad_out[0], bad_out[1] = -1, -1
     for p0 in range(0, n, B):
         p1 = min(n, p0 + B)

@@ -46,15 +46,9 @@ _LADDER_TOL = 1e-10
 
 
 @dataclasses.dataclass(frozen=True)
-class ParallelResult:
-    """Result of :func:`evaluate` at n poses (SI).
-
-    K, S (n, 6, 6): TCP stiffness and compliance; twist (n, 6) under ``wrench`` (n, 6); leg_stiffness
-    (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
-    W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
-    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts and the
-    axial tangent stiffness of the measured laws with a force ladder.
-    """
+class TcpResult:
+    """The TCP of a device model at n poses (SI): ``model`` and ``joints`` evaluated, poses (n, 6), wrench (n, 6);
+    K, S (n, 6, 6) TCP stiffness and compliance (twist [d; theta] <- wrench [F; M]); twist (n, 6) under the wrench."""
 
     model: str
     joints: str
@@ -63,6 +57,21 @@ class ParallelResult:
     K: np.ndarray
     S: np.ndarray
     twist: np.ndarray
+
+    def directional_stiffness(self, direction) -> np.ndarray:
+        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m (seed 000 §4.7)."""
+        from femcheck.compliance.directional import directional_stiffness
+        return directional_stiffness(self.S, direction)
+
+
+@dataclasses.dataclass(frozen=True)
+class ParallelResult(TcpResult):
+    """Result of :func:`evaluate` at n poses (SI): :class:`TcpResult` and leg_stiffness (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
+    W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
+    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts and the
+    axial tangent stiffness of the measured laws with a force ladder.
+    """
+
     leg_stiffness: np.ndarray
     leg_wrench: np.ndarray
     element_names: tuple[str, ...]
@@ -79,11 +88,6 @@ class ParallelResult:
         """The inverse kinematics of ``poses`` (:func:`~femcheck.parallel.leg_kinematics.solve_legs`)."""
         src = self.state_source
         return src if isinstance(src, DeviceState) else src()
-
-    def directional_stiffness(self, direction) -> np.ndarray:
-        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m."""
-        from femcheck.compliance.directional import directional_stiffness
-        return directional_stiffness(self.S, direction)
 
 
 def ladder_compliance(F, loads_N, approach_m) -> np.ndarray:

@@ -32,16 +32,7 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     R, C_t = _targets(tb, device, P)
     i_n = tb.tab[0]
     nd, nc, nl = tb.tab[1].shape[1], tb.tab[5].shape[1], tb.tab[7].shape[1]
-    # every entry a leg has is written by the kernel; the padding of shorter legs is never read
-    q = np.empty((L, n, nd))
-    res = np.empty((L, n))
-    ok = np.empty((L, n), dtype=np.bool_)
-    closed = np.empty((L, n), dtype=np.bool_)
-    C = np.empty((L, n, 3))
-    cen = np.empty((L, n, nc, 3))
-    tw = np.empty((L, n, nd, 6))
-    lR = np.empty((L, n, nl, 3, 3))
-    llen = np.empty((L, n, nl))
+    q, res, ok, closed, C, cen, tw, lR, llen = kern.state_buffers(L, n, nd, nc, nl)
     kern.ik_kernel(tb.tab, R, C_t, bool(numeric_only), q, res, ok, closed, C, cen, tw, lR, llen)
     legs = []
     for l in range(L):
