@@ -262,7 +262,9 @@ def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
 @njit(cache=True, error_model="numpy")
 def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw, c):
     """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0] (as :func:`_set_twist`, with
-    the freedom's axis w = Rp[k] a and point c = Rp[k] c_0 + tp[k] carried by the pose); c (3,) work array."""
+    the freedom's axis w = Rp[k] a and point c = Rp[k] c_0 + tp[k] carried by the pose); c (3,) work array.
+    Written out, not a call of :func:`_set_twist`: with the call the Delta's detailed model (R*-U-U legs, twists at
+    every pose) ran 6 to 9 % slower (released joints; 4,000 poses, CPU time, best of 9, measured 3 times)."""
     for k in range(i_n[l, 0]):
         a0, a1, a2 = daxis[l, k, 0], daxis[l, k, 1], daxis[l, k, 2]
         c0, c1, c2 = dpoint[l, k, 0], dpoint[l, k, 1], dpoint[l, k, 2]
