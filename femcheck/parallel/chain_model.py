@@ -163,25 +163,25 @@ def joint_rotation_compliances(device, state: DeviceState, c_rot: float) -> list
     about its centre J; a U joint: ``c_rot (I3 - z z^T)``, its two rotations normal to the link z ending at it
     (docs/conventions.md §5). At C: ``Jf(C - J)^T [[0, 0], [0, S_rot]] Jf(C - J)``. The S terms belong to the
     ``hertz_point`` element kind, the U terms to ``hertz_line`` (the joints' contact laws; not scaled)."""
-    out = []
-    for i, leg in enumerate(device.legs):
-        s = state.legs[i]
-        n = s.C.shape[0]
-        parts: dict[str, np.ndarray] = {}
-        for k, jt in enumerate(leg.joint_types):
-            if jt not in ("S", "U"):
-                continue
-            c = int(leg.joint_centre[k])
-            S_J = np.zeros((n, 6, 6))
-            S_J[:, 3:, 3:] = c_rot * np.eye(3)
-            if jt == "U":
-                z = s.link_R[:, c - 1, :, 2]
-                S_J[:, 3:, 3:] -= c_rot * z[:, :, None] * z[:, None, :]
-            to_C = twist_shift(s.C - s.centres[:, c])
-            kind = "hertz_point" if jt == "S" else "hertz_line"
-            parts[kind] = parts.get(kind, 0.0) + to_C @ S_J @ np.swapaxes(to_C, -1, -2)
-        out.append(parts)
-    return out
+    return [_joint_rotations(leg, s, c_rot) for leg, s in zip(device.legs, state.legs)]
+
+
+def _joint_rotations(leg, s, c_rot: float) -> dict[str, np.ndarray]:
+    """:func:`joint_rotation_compliances` of one leg, ``s`` its LegState."""
+    parts: dict[str, np.ndarray] = {}
+    for k, jt in enumerate(leg.joint_types):
+        if jt not in ("S", "U"):
+            continue
+        c = int(leg.joint_centre[k])
+        S_J = np.zeros((s.C.shape[0], 6, 6))
+        S_J[:, 3:, 3:] = c_rot * np.eye(3)
+        if jt == "U":   # the link ending at the joint's centre c is link c - 1
+            z = s.link_R[:, c - 1, :, 2]
+            S_J[:, 3:, 3:] -= c_rot * z[:, :, None] * z[:, None, :]
+        to_C = twist_shift(s.C - s.centres[:, c])
+        kind = "hertz_point" if jt == "S" else "hertz_line"
+        parts[kind] = parts.get(kind, 0.0) + to_C @ S_J @ np.swapaxes(to_C, -1, -2)
+    return parts
 
 
 def _leg_stiffness(S, N):
