@@ -7,7 +7,7 @@ import pytest
 
 import femcheck
 from femcheck.chain import ChainAdjustments, chain_element_compliances, device_parameters, evaluate
-from femcheck.chain.haptic_6psu_model import guideway_frames, link_frames
+from femcheck.kinematics.frames import guideway_frames, link_frames
 from femcheck.compliance import cantilever_compliance
 from femcheck.kinematics import psu6
 from femcheck.kinematics.frames import rot6, twist_shift

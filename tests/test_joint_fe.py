@@ -134,7 +134,7 @@ def test_spherical_joint_contact_fe_coarse(case, tmp_path):
 def test_joint_law_adjustments_scale_the_joint_elements(case):
     """The FE-measured axial law enters the extended model as the sp/uj element factor FE / closed form,
     and changes the TCP compliance in the direction of the factor (softer joint -> softer device)."""
-    from femcheck.chain.haptic_6psu_model import ELEMENTS, evaluate
+    from femcheck.chain import ELEMENTS, evaluate
     from femcheck.kinematics.psu6 import test_points
     an = jf.analytical_compliance(case, "spherical")
     res = {"joint": "spherical", "fe_component_compliance": [None, None, 1.5 * an[2, 2], None, None, None],

@@ -39,7 +39,7 @@ def psu():
 
 @pytest.mark.parametrize("joints", ["rigid", "released"])
 @pytest.mark.parametrize("law", list(LAWS))
-def test_law_replaced_in_its_module_moves_the_6psu_kernel(law, joints, psu, monkeypatch):
+def test_law_replaced_in_its_module_moves_the_6psu_chain(law, joints, psu, monkeypatch):
     case, P = psu
     module, attr, make = LAWS[law]
     before = evaluate(case, P, W, joints=joints).twist
@@ -73,6 +73,6 @@ def test_law_replaced_in_its_module_moves_the_parallel_kernel(law, monkeypatch):
     fused = evaluate_parallel(dev, P, W, model="detailed", joints="rigid").twist
     on_state = evaluate_parallel(dev, P, W, model="detailed", joints="rigid", state=solve_legs(dev, P)).twist
     reference = evaluate_parallel(dev, P, W, model="detailed", joints="rigid", backend="numpy").twist
-    assert np.all(np.abs(fused[:, 0] / before[:, 0] - 1.0) > 0.01)    # as for the 6-PSU kernel
+    assert np.all(np.abs(fused[:, 0] / before[:, 0] - 1.0) > 0.01)    # as for the 6-PSU chain
     for got in (fused, on_state):
         assert np.abs(got - reference).max() < 1e-9 * np.abs(reference).max()   # the backends' bar (RTOL)

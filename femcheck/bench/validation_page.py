@@ -54,8 +54,8 @@ AREA_TEXT = {
                 "a check that two cold builds give the same mesh.",
     "joints": "The passive joints' contact FE at coarse, default and fine meshes: sizes, iterations, times, memory.",
     "monolithic_leg": "One complete leg as one contact FE model against the substructured leg.",
-    "parallel_device": "The general parallel-device model against the dedicated 6-PSU kernel on the same poses: "
-                       "throughput of the compiled and numpy paths.",
+    "parallel_device": "The general parallel-device model on the 6-PSU, the hexapod and the Delta: throughput "
+                       "of the compiled and numpy paths, against the retired 6-PSU kernel's recorded throughput.",
     "physical_worlds": "The diagnosis of the reference device against physically modified copies of its case "
                        "(material, section, pin radius, cable modulus; one leg or all; singles and pairs; the "
                        "world is the device FE of the modified case, coarse mesh): element confusion and the rates "

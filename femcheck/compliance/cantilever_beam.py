@@ -10,8 +10,8 @@ with optional Timoshenko shear:
 This is exactly the inverse of the 12/6/4 tip stiffness (12EI/L^3, -+6EI/L^2, 4EI/L, EA/L, GJ/L).
 
 :func:`cantilever_terms` is THE implementation of the cantilever law: :func:`cantilever_compliance` places its
-eight distinct entries in the 6 x 6 matrix, and the compiled chain kernels (:mod:`femcheck.chain.haptic_6psu_kernel`,
-:mod:`femcheck.parallel.chain_kernel`) call the function this module holds when they run, compiled by
+eight distinct entries in the 6 x 6 matrix, and the compiled chain kernel
+(:mod:`femcheck.parallel.chain_kernel`) calls the function this module holds when it runs, compiled by
 :func:`femcheck.compliance.kernel_laws.kernel_laws` (a numba-compatible leaf: scalars or numpy arrays).
 """
 from __future__ import annotations

@@ -9,8 +9,8 @@ Seed 000 writes this with E' = 2 E* and R' = R*/2; its stiffness E' (2 R' delta)
 its eq. 27 equals (6 E*^2 R* F)^(1/3) exactly, so only the notation differs.
 
 :func:`hertz_tangent_stiffness` is THE implementation of the Hertz point-contact stiffness law: the numpy chain
-models call it, and the compiled chain kernels (:mod:`femcheck.chain.haptic_6psu_kernel`,
-:mod:`femcheck.parallel.chain_kernel`) call the function this module holds when they run, compiled by
+models call it, and the compiled chain kernel
+(:mod:`femcheck.parallel.chain_kernel`) calls the function this module holds when it runs, compiled by
 :func:`femcheck.compliance.kernel_laws.kernel_laws` (a numba-compatible leaf: scalars or numpy arrays, no
 allocation). :func:`effective_modulus` and :func:`effective_radius` are THE E* and R* of the analytical model.
 """

@@ -1,6 +1,6 @@
 """The element laws as the compiled chain kernels call them: one implementation of each law, in its module.
 
-The numba chain kernels (:mod:`femcheck.chain.haptic_6psu_kernel`, :mod:`femcheck.parallel.chain_kernel`) evaluate
+The numba chain kernels (:mod:`femcheck.parallel.chain_kernel`) evaluate
 two laws inside their per-pose loops: the Hertz point-contact tangent stiffness (inside the linearization fixed
 point, at forces known only there) and the cantilever tip compliance (per leg and pose). They do not hold copies
 of them: they take the laws as first-class function arguments (numba ``cfunc`` pointers), compiled here from the

@@ -19,8 +19,7 @@ import dataclasses
 
 import numpy as np
 
-from femcheck.chain.haptic_6psu_model import MODEL_ELEMENTS
-from femcheck.chain import ELEMENTS
+from femcheck.chain import ELEMENTS, MODEL_ELEMENTS
 
 
 @dataclasses.dataclass(frozen=True)

@@ -16,9 +16,8 @@ from typing import Protocol
 
 import numpy as np
 
-from femcheck.chain import ELEMENTS, ChainAdjustments, evaluate
+from femcheck.chain import ELEMENTS, MODEL_ELEMENTS, ChainAdjustments, evaluate
 from femcheck.diagnose.working_state import WorkingState
-from femcheck.chain.haptic_6psu_model import MODEL_ELEMENTS
 
 #: element column indices in ``element_scale`` (order ``femcheck.chain.ELEMENTS``)
 LG, ACT, SP, PROX, UJ = (ELEMENTS.index(e) for e in ("lg", "act", "sp", "prox", "uj"))

@@ -184,12 +184,12 @@ def joint_law_adjustments(results: list[dict]):
 
     A leg with ideal passive joints is a two-force member, so its joints work along their axes: the
     axial compliance is the joint law that enters the leg. This returns
-    :class:`femcheck.chain.haptic_6psu_model.ChainAdjustments` whose ``element_scale`` multiplies the
+    :class:`femcheck.chain.ChainAdjustments` whose ``element_scale`` multiplies the
     ``sp`` and ``uj`` element compliances of every chain by FE / closed form of the axial component
     (``check_joint`` results, one per joint type; a joint not given keeps its closed form, factor 1).
     ``femcheck diagnose`` and the sweeps take such adjustments (``evaluate(..., adjust=...)``).
     """
-    from femcheck.chain.haptic_6psu_model import ELEMENTS, ChainAdjustments
+    from femcheck.chain import ELEMENTS, ChainAdjustments
 
     scale = np.ones((6, len(ELEMENTS)))
     for res in results:

@@ -12,6 +12,6 @@ compliance-chain model ``K_T = sum_i G_i^T K_i G_i`` and its beam FE, all from o
 - :mod:`femcheck.parallel.stiffness_map`: the ``femcheck map`` slice.
 
 The 6-PSU reference case (``cases/haptic_6psu.toml``) is a parallel device whose legs are the paper's layout
-(:mod:`femcheck.case.psu_layout`); its chain model ``femcheck.chain`` still runs the dedicated kernel, and the tests
-hold the two together (and the bench ``parallel_device`` times them on the same poses).
+(:mod:`femcheck.case.psu_layout`); its five-element chain model ``femcheck.chain`` is this package's model on
+those legs (:mod:`femcheck.chain.psu_view`).
 """

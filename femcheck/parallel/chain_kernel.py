@@ -28,7 +28,7 @@ drive ``c xi xi^T``, Hertz line contact in the link frame), the leg's wrench bas
 for released joints the Householder complement of the passive twists), ``A = N^T S N``, ``E = G^T N`` and
 ``K_T = sum E A^-1 E^T``. The Hertz point contacts ``c I3`` on the translations are linearized at their leg's
 force by fixed-point iteration: a two-force leg (m = 1) is a scalar ``k = 1 / (a + c |n_F|^2)``; any other leg
-keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses (as the 6-PSU kernel does). Released
+keeps ``A^-1`` and updates by Woodbury's identity with 3x3 inverses. Released
 P-S-U and U-P-S legs use their one wrench directly, the force along the line of the S and U centres.
 
 :func:`evaluate_kernel` runs both in one call over all poses, block by block (the default of
@@ -48,8 +48,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-from femcheck.chain.haptic_6psu_kernel import _inverse3
 
 #: the numeric IK's constants (as :mod:`femcheck.parallel.leg_kinematics`)
 MAX_ITER = 60
@@ -124,6 +122,24 @@ def _chol_inverse(Lf, out, m):
     for a in range(m):
         for b in range(a + 1, m):
             out[b, a] = out[a, b]
+
+
+@njit(cache=True, error_model="numpy")
+def _inverse3(A, out):
+    """out = A^-1 for a 3x3 matrix by the adjugate."""
+    c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
+    c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
+    c02 = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
+    det = A[0, 0] * c00 + A[0, 1] * c01 + A[0, 2] * c02
+    out[0, 0] = c00 / det
+    out[1, 0] = c01 / det
+    out[2, 0] = c02 / det
+    out[0, 1] = (A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]) / det
+    out[1, 1] = (A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]) / det
+    out[2, 1] = (A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]) / det
+    out[0, 2] = (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) / det
+    out[1, 2] = (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) / det
+    out[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) / det
 
 
 @njit(cache=True, error_model="numpy")
@@ -246,7 +262,9 @@ def _end_error(l, i_n, cen, Rp, tp, R_t, C_t, C, e, Rend, Rerr, R_home):
 @njit(cache=True, error_model="numpy")
 def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw, c):
     """(nd, 6) unit twists of leg l's freedoms at C: R [w x (C - c); w], P [u; 0] (as :func:`_set_twist`, with
-    the freedom's axis w = Rp[k] a and point c = Rp[k] c_0 + tp[k] carried by the pose); c (3,) work array."""
+    the freedom's axis w = Rp[k] a and point c = Rp[k] c_0 + tp[k] carried by the pose); c (3,) work array.
+    Written out, not a call of :func:`_set_twist`: with the call the Delta's detailed model (R*-U-U legs, twists at
+    every pose) ran 6 to 9 % slower (released joints; 4,000 poses, CPU time, best of 9, measured 3 times)."""
     for k in range(i_n[l, 0]):
         a0, a1, a2 = daxis[l, k, 0], daxis[l, k, 1], daxis[l, k, 2]
         c0, c1, c2 = dpoint[l, k, 0], dpoint[l, k, 1], dpoint[l, k, 2]
@@ -907,6 +925,42 @@ def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, sca
                     Ae[b, a] += f * acc
 
 
+@njit(cache=True, error_model="numpy")
+def _joint_rotation_forms(l, p, c_rot, jr, k_hp, k_hl, C, cen, lR, Ae, slot_kind, ns, Z, V):
+    """Rigid joints with a joint-rotation compliance ``c_rot`` (rad/(N m)): one slot per S joint (``c_rot I3`` on
+    the rotations about its centre J) and per U joint (``c_rot (I3 - z z^T)``, z the axis of the link ending at it)
+    of leg l, carried to C: ``Ae = V^T Z V`` with ``V = [[r]x, I3]`` (the moment at J, ``m + r x f``, r = C - J).
+    Their energy goes to the Hertz point (S) and Hertz line (U) element kinds, unscaled. Returns the slot count."""
+    for j in range(jr.shape[1]):
+        c = jr[l, j, 0]
+        if c < 0:
+            continue
+        r0 = C[l, p, 0] - cen[l, p, c, 0]
+        r1 = C[l, p, 1] - cen[l, p, c, 1]
+        r2 = C[l, p, 2] - cen[l, p, c, 2]
+        u = jr[l, j, 2] == 1
+        for i in range(3):
+            for k in range(3):
+                zz = lR[l, p, jr[l, j, 1], i, 2] * lR[l, p, jr[l, j, 1], k, 2] if u else 0.0
+                Z[i, k] = c_rot * ((1.0 if i == k else 0.0) - zz)
+        for i in range(3):
+            for k in range(3):
+                V[i, 3 + k] = 1.0 if i == k else 0.0
+        V[0, 0], V[0, 1], V[0, 2] = 0.0, -r2, r1
+        V[1, 0], V[1, 1], V[1, 2] = r2, 0.0, -r0
+        V[2, 0], V[2, 1], V[2, 2] = -r1, r0, 0.0
+        for a in range(6):
+            for b in range(6):
+                acc = 0.0
+                for i in range(3):
+                    for k in range(3):
+                        acc += V[i, a] * Z[i, k] * V[k, b]
+                Ae[ns, a, b] = acc
+        slot_kind[ns] = k_hl if u else k_hp
+        ns += 1
+    return ns
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _sym_add(K, E, M, l, m, sign, xv):
     """K[upper] += sign E[l] M[l] E[l]^T, E[l] (6, m), M[l] (m, m) (indexed in place, no views)."""
@@ -924,7 +978,7 @@ def _sym_add(K, E, M, l, m, sign, xv):
 
 
 @njit(cache=True, error_model="numpy")
-def chain_kernel(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
+def chain_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, tcp, wrench, scale,
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """Evaluate n poses with the Hertz and cantilever laws ``hertz``, ``cantilever``
     (:func:`femcheck.compliance.kernel_laws.kernel_laws`). State arrays leg-major as :func:`ik_kernel` writes them; tcp (n, 3); wrench (n, 6);
@@ -935,14 +989,16 @@ def chain_kernel(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
 
     Per leg, with the wrench basis N (6, m) and every element's ``A_e = N^T S_e N``: ``A0 = sum A_e``,
     ``E = G^T N``; the leg adds ``E (A0 + c B B^T)^-1 E^T`` to K_T (B = N[:3]^T, c the Hertz point compliance).
-    Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration)."""
-    return _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale,
-                        0, tcp.shape[0],
+    Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration).
+    ``c_rot`` > 0 (rigid joints): the joint-rotation compliance of every S and U joint (:func:`_joint_rotation_forms`)."""
+    return _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, tcp, wrench,
+                        scale, 0, tcp.shape[0],
                         K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
 
 
 @njit(cache=True, error_model="numpy")
-def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, tcp, wrench, scale, p0, p1,
+def _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, tcp, wrench, scale,
+                 p0, p1,
                  K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out):
     """:func:`chain_kernel` on the poses p0 <= p < p1: the state arrays (C, cen, tw, lR, llen) at index p - p0,
     everything else at p."""
@@ -950,8 +1006,9 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                                                                  tab[12], tab[15], tab[17])
     L = i_n.shape[0]
     nl = lk_i.shape[1]
-    n_slot = nl + 4
     ml_i, ml_S, ml_n, ml_F, ml_d = tab[-1]   # FE-measured joint laws (kernel_tables._measured_law_tables)
+    jr = tab[20]                             # S and U joints (kernel_tables._joint_rotation_table)
+    n_slot = nl + 4 + jr.shape[1]
     cl = np.zeros((L, ml_i.shape[1]))     # current axial compliance of the ladder laws
     lad_slot = np.full(L, -1, np.int64)   # slot of a leg's ladder laws (mode 3: refactored every iteration)
     k_drive, k_hp, k_hl = kinds[0], kinds[1], kinds[2]
@@ -1092,6 +1149,8 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
                         ns += 1
             else:
                 lad_slot[l] = -1
+            if c_rot > 0.0 and not released:
+                ns = _joint_rotation_forms(l, jp, c_rot, jr, k_hp, k_hl, C, cen, lR, Ae[l], slot_kind[l], ns, Z3, V)
             n_slots[l] = ns
             for a in range(m):
                 for b in range(m):
@@ -1347,6 +1406,17 @@ def _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, 
     return 0
 
 
+@njit(cache=True)
+def state_buffers(L, n, nd, nc, nl):
+    """The leg-state arrays :func:`ik_kernel` writes for n poses of L legs padded to nd freedoms, nc centres and nl
+    links: q (L, n, nd), residual (L, n), ok, closed form (L, n) bool, C (L, n, 3), centres (L, n, nc, 3), twists
+    (L, n, nd, 6), link frames (L, n, nl, 3, 3), link lengths (L, n, nl); zero (the lengths one), so that the
+    padding and what a closed form skips hold finite values."""
+    return (np.zeros((L, n, nd)), np.zeros((L, n)), np.zeros((L, n), dtype=np.bool_), np.zeros((L, n), dtype=np.bool_),
+            np.zeros((L, n, 3)), np.zeros((L, n, nc, 3)), np.zeros((L, n, nd, 6)), np.zeros((L, n, nl, 3, 3)),
+            np.ones((L, n, nl)))
+
+
 #: poses per block of the fused kernel: the block's leg state (~200 kB for six legs) stays in the cache
 BLOCK = 64
 
@@ -1382,7 +1452,7 @@ def _pose_targets(P, p0, p1, tcp_off, b_plat, R_b, C_b):
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, P, wrench, scale,
+def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, P, wrench, scale,
                     K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out, contrib_out, bad_out):
     """Inverse kinematics and chain model of the n TCP poses P (n, 6) in one call, block by block of ``BLOCK``
     poses: the targets (:func:`_pose_targets`), the legs (:func:`_ik_range`: a closed-form leg computes only
@@ -1400,15 +1470,7 @@ def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, P, wrench
     B = min(BLOCK, max(n, 1))
     R_b = np.zeros((B, 3, 3))
     C_b = np.zeros((L, B, 3))
-    q = np.zeros((L, B, nd))
-    res = np.zeros((L, B))
-    ok = np.zeros((L, B), dtype=np.bool_)
-    closed = np.zeros((L, B), dtype=np.bool_)
-    C = np.zeros((L, B, 3))
-    cen = np.zeros((L, B, nc, 3))
-    tw = np.zeros((L, B, nd, 6))
-    lR = np.zeros((L, B, nl, 3, 3))
-    llen = np.ones((L, B, nl))
+    q, res, ok, closed, C, cen, tw, lR, llen = state_buffers(L, B, nd, nc, nl)
     bad_out[0], bad_out[1] = -1, -1
     for p0 in range(0, n, B):
         p1 = min(n, p0 + B)
@@ -1419,7 +1481,7 @@ def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, P, wrench
                 if not ok[l, p - p0]:
                     bad_out[0], bad_out[1] = p, l
                     return 0
-        status = _chain_range(hertz, cantilever, tab, detailed, released, shear, C, cen, tw, lR, llen, P, wrench, scale,
+        status = _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, P, wrench, scale,
                               p0, p1,
                               K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
         if status != 0:

@@ -46,15 +46,9 @@ _LADDER_TOL = 1e-10
 
 
 @dataclasses.dataclass(frozen=True)
-class ParallelResult:
-    """Result of :func:`evaluate` at n poses (SI).
-
-    K, S (n, 6, 6): TCP stiffness and compliance; twist (n, 6) under ``wrench`` (n, 6); leg_stiffness
-    (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
-    W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
-    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts and the
-    axial tangent stiffness of the measured laws with a force ladder.
-    """
+class TcpResult:
+    """The TCP of a device model at n poses (SI): ``model`` and ``joints`` evaluated, poses (n, 6), wrench (n, 6);
+    K, S (n, 6, 6) TCP stiffness and compliance (twist [d; theta] <- wrench [F; M]); twist (n, 6) under the wrench."""
 
     model: str
     joints: str
@@ -63,6 +57,21 @@ class ParallelResult:
     K: np.ndarray
     S: np.ndarray
     twist: np.ndarray
+
+    def directional_stiffness(self, direction) -> np.ndarray:
+        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m (seed 000 §4.7)."""
+        from femcheck.compliance.directional import directional_stiffness
+        return directional_stiffness(self.S, direction)
+
+
+@dataclasses.dataclass(frozen=True)
+class ParallelResult(TcpResult):
+    """Result of :func:`evaluate` at n poses (SI): :class:`TcpResult` and leg_stiffness (n, L, 6, 6) K_i at C_i; leg_wrench (n, L, 6) W_C,i; element_names (E,); element_energy (n, L, E)
+    W_C^T S_e W_C per leg and element kind (J, x2); contributions (n, E) share of each element kind (sums to 1;
+    NaN at zero load); hertz_stiffness {(leg, joint): (n,)} N/m of the linearized Hertz point contacts and the
+    axial tangent stiffness of the measured laws with a force ladder.
+    """
+
     leg_stiffness: np.ndarray
     leg_wrench: np.ndarray
     element_names: tuple[str, ...]
@@ -79,11 +88,6 @@ class ParallelResult:
         """The inverse kinematics of ``poses`` (:func:`~femcheck.parallel.leg_kinematics.solve_legs`)."""
         src = self.state_source
         return src if isinstance(src, DeviceState) else src()
-
-    def directional_stiffness(self, direction) -> np.ndarray:
-        """(n,) stiffness along a unit translation ``direction`` (3,): 1 / (d^T S_tt d), N/m."""
-        from femcheck.compliance.directional import directional_stiffness
-        return directional_stiffness(self.S, direction)
 
 
 def ladder_compliance(F, loads_N, approach_m) -> np.ndarray:
@@ -152,6 +156,34 @@ def leg_element_compliances(device, state: DeviceState, model: str = "detailed")
     return out
 
 
+def joint_rotation_compliances(device, state: DeviceState, c_rot: float) -> list[dict[str, np.ndarray]]:
+    """Per leg: {element kind: (n, 6, 6)} the joint-rotation compliance ``c_rot`` (rad/(N m)) of its S and U joints
+    carried to C_i, frame U: each passive joint rotation a torsional spring instead of a welded joint (rigid joints;
+    the passive-joint elimination with springs instead of free joints). An S joint: ``c_rot I3`` on the rotations
+    about its centre J; a U joint: ``c_rot (I3 - z z^T)``, its two rotations normal to the link z ending at it
+    (docs/conventions.md §5). At C: ``Jf(C - J)^T [[0, 0], [0, S_rot]] Jf(C - J)``. The S terms belong to the
+    ``hertz_point`` element kind, the U terms to ``hertz_line`` (the joints' contact laws; not scaled)."""
+    return [_joint_rotations(leg, s, c_rot) for leg, s in zip(device.legs, state.legs)]
+
+
+def _joint_rotations(leg, s, c_rot: float) -> dict[str, np.ndarray]:
+    """:func:`joint_rotation_compliances` of one leg, ``s`` its LegState."""
+    parts: dict[str, np.ndarray] = {}
+    for k, jt in enumerate(leg.joint_types):
+        if jt not in ("S", "U"):
+            continue
+        c = int(leg.joint_centre[k])
+        S_J = np.zeros((s.C.shape[0], 6, 6))
+        S_J[:, 3:, 3:] = c_rot * np.eye(3)
+        if jt == "U":   # the link ending at the joint's centre c is link c - 1
+            z = s.link_R[:, c - 1, :, 2]
+            S_J[:, 3:, 3:] -= c_rot * z[:, :, None] * z[:, None, :]
+        to_C = twist_shift(s.C - s.centres[:, c])
+        kind = "hertz_point" if jt == "S" else "hertz_line"
+        parts[kind] = parts.get(kind, 0.0) + to_C @ S_J @ np.swapaxes(to_C, -1, -2)
+    return parts
+
+
 def _leg_stiffness(S, N):
     """K = N (N^T S N)^-1 N^T, (n, 6, 6)."""
     A = np.swapaxes(N, -1, -2) @ S @ N
@@ -160,7 +192,8 @@ def _leg_stiffness(S, N):
 
 
 def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str = "released",
-             state: DeviceState | None = None, element_scale=None, backend: str = "compiled") -> ParallelResult:
+             state: DeviceState | None = None, element_scale=None, backend: str = "compiled",
+             joint_rotation_compliance: float = 0.0) -> ParallelResult:
     """Stiffness, deflection and element breakdown of ``device`` (:class:`~femcheck.parallel.device.ParallelDevice`).
 
     Parameters
@@ -176,6 +209,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         model extensions and for locating an effect by leg and element
     backend : "compiled" (default: the numba kernels of :mod:`femcheck.parallel.chain_kernel`, the same
         equations one pose at a time) or "numpy" (this function's vectorized transcription, the reference)
+    joint_rotation_compliance : rad/(N m), every S and U joint's rotations as torsional springs under ``rigid``
+        joints (0 = welded; large -> released; :func:`joint_rotation_compliances`); ignored under ``released``
     """
     from femcheck.parallel.compiled import check_backend, evaluate_compiled, evaluate_fused, fused_available
     check_backend(backend)
@@ -185,11 +220,15 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         raise ValueError(f"joints: {joints!r}; expected one of {list(JOINT_IDEALIZATIONS)}")
     names = device.element_names
     L = device.n_legs
+    c_rot = float(joint_rotation_compliance) if joints == "rigid" else 0.0
+    if c_rot and not {"hertz_point", "hertz_line"} <= set(names):
+        raise ValueError("joint_rotation_compliance: needs a device whose S and U joints have contact laws "
+                         "(element kinds hertz_point and hertz_line)")
     if state is None and backend == "compiled" and fused_available(device, joints):
         # inverse kinematics and chain model in one compiled call; the leg state is solved again only if asked for
         P = as_poses(poses)
         W, scale = _load_and_scale(P.shape[0], L, len(names), wrench, element_scale, device.element_scale)
-        out = evaluate_fused(device, P, W, scale, model, joints)
+        out = evaluate_fused(device, P, W, scale, model, joints, c_rot)
         if len(out) == 2:
             _raise_unreachable(device, P, *out)
         K_T, S_T, t, K_leg, W_C, energy, k_h, iterations, contributions = out
@@ -202,7 +241,7 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
         _raise_unreachable(device, state.poses, k, next(i for i, s in enumerate(state.legs) if not s.ok[k]))
     W, scale = _load_and_scale(n, L, len(names), wrench, element_scale, device.element_scale)
     if backend == "compiled":
-        out = evaluate_compiled(device, state, W, scale, model, joints)
+        out = evaluate_compiled(device, state, W, scale, model, joints, c_rot)
         if out is not None:
             K_T, S_T, t, K_leg, W_C, energy, k_h, iterations = out
             return _result(model, joints, state.poses, state, W, K_T, S_T, t, K_leg, W_C, names, energy, k_h,
@@ -212,7 +251,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
     G = [state.G(i) for i in range(L)]
     N = [np.broadcast_to(np.eye(6), (n, 6, 6)) if joints == "rigid" else released_wrenches(leg, state.legs[i])
          for i, leg in enumerate(device.legs)]
-    S_fixed = [sum(p.values()) if p else np.zeros((n, 6, 6)) for p in parts]
+    rot = joint_rotation_compliances(device, state, c_rot) if c_rot else [{} for _ in range(L)]
+    S_fixed = [(sum(p.values()) if p else np.zeros((n, 6, 6))) + sum(rot[i].values()) for i, p in enumerate(parts)]
     hertz = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.hertz_point.items()} if model == "detailed" else {}
     k_h = {key: hertz_point_contact.hertz_tangent_stiffness(F_min, E, R) * np.ones(n) for key, (E, R, F_min) in hertz.items()}
     ladder = {(i, j): v for i, leg in enumerate(device.legs) for j, v in leg.measured_ladder.items()} if model == "detailed" else {}
@@ -259,6 +299,8 @@ def evaluate(device, poses, wrench=None, *, model: str = "detailed", joints: str
                                                              * scale[:, i, names.index("hertz_point")] / k_h[li, j])
         for _, S_e in ladder_parts(i):
             energy[:, i, names.index("measured_law")] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
+        for name, S_e in rot[i].items():
+            energy[:, i, names.index(name)] += np.einsum("ni,nij,nj->n", W_C[:, i], S_e, W_C[:, i])
     k_h = {**k_h, **{key: 1.0 / c for key, c in c_lad.items()}}
     return _result(model, joints, state.poses, state, W, K_T, np.linalg.inv(K_T), t, np.stack(K_leg, axis=1), W_C,
                    names, energy, k_h, len(history) + 1)

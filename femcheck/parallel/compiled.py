@@ -32,16 +32,7 @@ def solve_legs_compiled(device, P: np.ndarray, numeric_only: bool = False):
     R, C_t = _targets(tb, device, P)
     i_n = tb.tab[0]
     nd, nc, nl = tb.tab[1].shape[1], tb.tab[5].shape[1], tb.tab[7].shape[1]
-    # every entry a leg has is written by the kernel; the padding of shorter legs is never read
-    q = np.empty((L, n, nd))
-    res = np.empty((L, n))
-    ok = np.empty((L, n), dtype=np.bool_)
-    closed = np.empty((L, n), dtype=np.bool_)
-    C = np.empty((L, n, 3))
-    cen = np.empty((L, n, nc, 3))
-    tw = np.empty((L, n, nd, 6))
-    lR = np.empty((L, n, nl, 3, 3))
-    llen = np.empty((L, n, nl))
+    q, res, ok, closed, C, cen, tw, lR, llen = kern.state_buffers(L, n, nd, nc, nl)
     kern.ik_kernel(tb.tab, R, C_t, bool(numeric_only), q, res, ok, closed, C, cen, tw, lR, llen)
     legs = []
     for l in range(L):
@@ -80,7 +71,7 @@ def _packed(device, state):
     return C, cen, tw, lR, llen
 
 
-def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
+def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: str, joints: str, c_rot: float = 0.0):
     """The chain model by :func:`femcheck.parallel.chain_kernel.chain_kernel` on a solved ``state``: (K, S, t,
     leg stiffness, leg wrench, element energy, hertz stiffness dict, iterations), or None where the kernel does
     not cover the device (released joints with dependent passive twists: the numpy path then runs)."""
@@ -91,8 +82,8 @@ def evaluate_compiled(device, state, W: np.ndarray, scale: np.ndarray, model: st
     C, cen, tw, lR, llen = _packed(device, state)
     out = _outputs(tb, state.n, device.n_legs)
     from femcheck.compliance.kernel_laws import kernel_laws
-    status = kern.chain_kernel(*kernel_laws(), tb.tab, model == "detailed", joints == "released", bool(device.beam_shear), C, cen, tw,
-                               lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
+    status = kern.chain_kernel(*kernel_laws(), tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
+                               float(c_rot), C, cen, tw, lR, llen, np.ascontiguousarray(state.tcp), np.ascontiguousarray(W),
                                np.ascontiguousarray(scale), *out)
     return _finish(tb, device, model, status, out)
 
@@ -102,7 +93,8 @@ def fused_available(device, joints: str) -> bool:
     return joints == "rigid" or device_tables(device).released_ok
 
 
-def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, model: str, joints: str):
+def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, model: str, joints: str,
+                   c_rot: float = 0.0):
     """Inverse kinematics and chain model of the TCP poses P (n, 6) (validated by the caller) in one compiled call
     (:func:`femcheck.parallel.chain_kernel.evaluate_kernel`; the device must be :func:`fused_available`):
     the tuple of :func:`evaluate_compiled` followed by the contributions (n, E), or ``(pose, leg)`` of the first
@@ -115,7 +107,7 @@ def evaluate_fused(device, P: np.ndarray, W: np.ndarray, scale: np.ndarray, mode
     bad = np.empty(2, dtype=np.int64)
     from femcheck.compliance.kernel_laws import kernel_laws
     status = kern.evaluate_kernel(*kernel_laws(), tb.tab, model == "detailed", joints == "released", bool(device.beam_shear),
-                                  np.ascontiguousarray(P), np.ascontiguousarray(W), np.ascontiguousarray(scale),
+                                  float(c_rot), np.ascontiguousarray(P), np.ascontiguousarray(W), np.ascontiguousarray(scale),
                                   *out, contributions, bad)
     if bad[0] >= 0:
         return int(bad[0]), int(bad[1])

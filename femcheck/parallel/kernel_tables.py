@@ -161,7 +161,7 @@ def _build(device) -> DeviceTables:
     R_home = np.ascontiguousarray(_rotvec_matrix(device.home_pose[3:]))
     ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint = _measured_law_tables(device)
     tab = (i_n, dkind, daxis, dpoint, passive, cen, cen_first, lk_i, lk_x, lk_p, hl_c, hl_link, hp, lim_d, lim,
-           f_leg, b_plat, kinds, R_home, np.asarray(device.tcp_offset, float).copy(),
+           f_leg, b_plat, kinds, R_home, np.asarray(device.tcp_offset, float).copy(), _joint_rotation_table(device),
            (ml_i, ml_S, ml_n, ml_F, ml_d))   # measured laws: keep them last (tab[-1])
     return DeviceTables(tab=tab, n_elem=len(names), released_ok=released_ok, hp_joint=hp_joint, ik_kind=ik,
                         ml_joint=ml_joint)
@@ -193,6 +193,18 @@ def _measured_law_tables(device):
                     ml_F[l, j, :len(F)] = F
                     ml_d[l, j, :len(F)] = d
     return ml_i, ml_S, ml_n, ml_F, ml_d, ml_joint
+
+
+def _joint_rotation_table(device) -> np.ndarray:
+    """(L, nj, 3) int: the S and U joints of every leg whose rotations take a joint-rotation compliance
+    (:func:`femcheck.parallel.chain_model.joint_rotation_compliances`): centre index, the link ending at the joint
+    (U: its two rotations are those normal to that link), kind (0 S, 1 U); -1 padding."""
+    rows = [[(int(leg.joint_centre[k]), int(leg.joint_centre[k]) - 1, 0 if t == "S" else 1)
+             for k, t in enumerate(leg.joint_types) if t in ("S", "U")] for leg in device.legs]
+    out = np.full((len(rows), max(max(len(r) for r in rows), 1), 3), -1, np.int64)
+    for l, r in enumerate(rows):
+        out[l, :len(r)] = r
+    return out
 
 
 def _rotvec_matrix(v):

@@ -157,7 +157,7 @@ def classify(case, key: str) -> str:
     from femcheck.chain import device_parameters
     value, _ = _field_of(case, key)
     if getattr(case, "kind", "haptic_6psu") != "haptic_6psu":
-        return "variant"  # only the 6-PSU kernel takes element parameters as arrays
+        return "variant"  # only the 6-PSU chain model (femcheck.chain) takes element parameters as arrays
     try:
         device_parameters(case, {key: np.array([value])})
     except ValueError:
