@@ -24,7 +24,7 @@ from femcheck.sweep.store import SweepStore
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "haptic_6psu.toml"
 PARAMS = ["guideway.width_radial_m=0.010:0.020", "geometry.proximal_link_length_m=0.170:0.190"]
-N = 1000  # one sample per task: ~20 s of work at 2 jobs, so a signal lands midway even on a loaded machine
+N = 1000  # one sample per task: the workers are frozen after 3 stored tasks, so the signal lands midway
 
 
 def _args(out, *extra):
@@ -33,15 +33,30 @@ def _args(out, *extra):
             "--no-report", "--out", str(out), *extra]
 
 
+def _default_sigint() -> None:
+    """In the child before exec: Ctrl-C's default action. A shell's background job (pytest started with ``&``)
+    inherits SIGINT ignored, and Python then installs no KeyboardInterrupt handler: the sweep would never see it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_and_wait(out):
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1"}
-    proc = subprocess.Popen(_args(out), cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(_args(out), cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_sigint)
     store = SweepStore(out)
     deadline = time.monotonic() + 120
     while len(store.chunk_files()) < 3 and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)
     workers = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)] if proc.poll() is None else []
     return proc, store, workers, env
+
+
+def _signal(pids, sig) -> None:
+    for p in pids:
+        try:
+            os.kill(p, sig)
+        except ProcessLookupError:   # a worker that has already exited
+            pass
 
 
 def _gone(pids, timeout=15.0) -> bool:
@@ -65,7 +80,18 @@ def uninterrupted(tmp_path_factory):
 def test_stopped_sweep_leaves_no_worker_and_resumes_identically(tmp_path, uninterrupted, how):
     proc, store, workers, env = _start_and_wait(tmp_path / "run")
     assert proc.poll() is None and workers, "the sweep must still be running with its workers for this test to mean anything"
+    # the workers are frozen before the parent gets its signal, so that the sweep cannot finish in between (on a warm
+    # cache the remaining tasks take about a second); a frozen worker keeps the parent's SIGTERM (or the kernel's death
+    # signal) pending and acts on it once thawed, after the parent has handled its own signal
+    _signal(workers, signal.SIGSTOP)
     proc.send_signal(signal.SIGINT if how == "ctrl_c" else signal.SIGKILL)
+    if how == "ctrl_c":   # the parent stores status "interrupted" after it has told its workers to stop
+        deadline = time.monotonic() + 60
+        while store.read_manifest().get("status") != "interrupted" and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+    else:
+        proc.wait(timeout=60)
+    _signal(workers, signal.SIGCONT)
     rc = proc.wait(timeout=60)
     out, err = proc.communicate()
     if how == "ctrl_c":
