@@ -734,9 +734,15 @@ def _label(eff) -> str:
     return eff.id
 
 
+def _place(eff) -> tuple:
+    """The legs a cause moves (a cause of the whole device: all six)."""
+    return tuple(getattr(eff, "legs", ())) if getattr(eff, "located", False) else tuple(range(6))
+
+
 def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = ALIAS_CHI2) -> list[dict]:
-    """For each named cause, the causes the readings cannot separate from it: those that take its place in a weighed
-    rival (the other named causes at the same placements) whose chi^2 is within ``limit`` of the named explanation's.
+    """For each named cause, the causes the readings cannot separate from it: those of another id on the same legs
+    (:func:`_place`) that take its place in a weighed rival (the other named causes at the same placements) whose
+    chi^2 is within ``limit`` of the named explanation's.
 
     Returns one dict per named cause that has such partners: ``cause`` and ``legs`` of the named one, ``members``
     (the named first; each ``id``, ``legs``, ``delta_chi2`` = rival chi^2 - named chi^2), ``probability`` (the
@@ -754,7 +760,7 @@ def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = A
             cand = next(iter(extra))
             if cand == eff:
                 mass += p
-            elif cand.id != eff.id and abs(ex.chi2 - named.chi2) < limit:
+            elif cand.id != eff.id and _place(cand) == _place(eff) and abs(ex.chi2 - named.chi2) < limit:
                 members.append({"id": cand.id, "legs": list(getattr(cand, "legs", ())), "label": _label(cand),
                                 "delta_chi2": float(ex.chi2 - named.chi2)})
                 mass += p
