@@ -303,6 +303,8 @@ def summarize(rows: list) -> dict:
             "right_element_first_rate_singles": rate(singles, "right_element_first"),
             "right_element_first_rate_pairs": rate(pairs, "right_element_first"),
             "legs_right_rate": rate(rows, "legs_right"),
+            "first_alias_group_size_mean": round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3)
+            if rows else None,
             "explained_rate": rate([{"x": r["verdict"] == "explained"} for r in rows], "x"),
             "detectable_snr_min": DETECTABLE_SNR, "reading_scatter_m": SCATTER_M,
             **{f"snr_median_{el}": round(float(np.median(v)), 2) for el, v in snr.items() if v},

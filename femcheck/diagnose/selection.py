@@ -734,6 +734,13 @@ def _label(eff) -> str:
     return eff.id
 
 
+def _same_element(a, b) -> bool:
+    """Whether two causes move the same element alone (an element's uniform change that has a vocabulary id of its
+    own, e.g. ``actuation_compliance``, is that element's)."""
+    return (getattr(a, "uniform_cause", None) == b.id or getattr(b, "uniform_cause", None) == a.id
+            or (getattr(a, "located", False) and getattr(b, "located", False) and a.element == b.element))
+
+
 def _place(eff) -> tuple:
     """The legs a cause moves (a cause of the whole device: all six)."""
     return tuple(getattr(eff, "legs", ())) if getattr(eff, "located", False) else tuple(range(6))
@@ -760,13 +767,16 @@ def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = A
             cand = next(iter(extra))
             if cand == eff:
                 mass += p
-            elif cand.id != eff.id and _place(cand) == _place(eff) and abs(ex.chi2 - named.chi2) < limit:
+            elif (cand.id != eff.id and not _same_element(cand, eff) and _place(cand) == _place(eff)
+                  and abs(ex.chi2 - named.chi2) < limit):
                 members.append({"id": cand.id, "legs": list(getattr(cand, "legs", ())), "label": _label(cand),
                                 "delta_chi2": float(ex.chi2 - named.chi2)})
                 mass += p
         if not members:
             continue
-        members.sort(key=lambda m: m["delta_chi2"])
+        # one member per cause id: its placement that fits closest to the named one
+        members = sorted({m["id"]: m for m in sorted(members, key=lambda m: -abs(m["delta_chi2"]))}.values(),
+                         key=lambda m: m["delta_chi2"])
         head = {"id": eff.id, "legs": list(getattr(eff, "legs", ())), "label": _label(eff), "delta_chi2": 0.0}
         ids = ",".join(dict.fromkeys([eff.id] + [m["id"] for m in members]))
         text = (" \u2261 ".join([head["label"]] + [m["label"] for m in members])
