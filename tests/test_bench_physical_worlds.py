@@ -78,3 +78,23 @@ def test_confusion_table_counts_the_single_changes():
     assert lines[0][1:] == ["act", "lg"]
     assert dict((ln[0], ln[1:]) for ln in lines[1:]) == {"act": ["1", "0"], "lg": ["1", "1"]}
     assert np.sum([int(x) for ln in lines[1:] for x in ln[1:]]) == 3
+
+
+class _LinearWorld:
+    """A world whose TCP moves ``c`` m/N along the force at every point (a closed form for the signal)."""
+
+    def __init__(self, c: float):
+        self.c = c
+
+    def tcp_displacement(self, pose, force):
+        return self.c * np.asarray(force, float)
+
+
+def test_change_signal_is_the_rms_of_the_total_minus_preload_change(case):
+    """Against a reference of 1e-5 m/N, a world of 1.02e-5 m/N changes every total - preload reading (20 N - 5 N
+    along its direction) by 2e-7 m/N x 15 N = 3 um: RMS 3 um exactly (rounding only); the reference against itself
+    has no signal."""
+    from femcheck.experiment.dial_gauge import device_change_rms
+    rms = device_change_rms(case, [_LinearWorld(1e-5), _LinearWorld(1.02e-5)], _LinearWorld(1e-5),
+                            directions=("+x", "-y", "+z"))
+    np.testing.assert_allclose(rms, [0.0, 2e-7 * 15.0], rtol=1e-9, atol=1e-15)
