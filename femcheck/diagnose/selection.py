@@ -754,7 +754,8 @@ def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = A
     Returns one dict per named cause that has such partners: ``cause`` and ``legs`` of the named one, ``members``
     (the named first; each ``id``, ``legs``, ``delta_chi2`` = rival chi^2 - named chi^2), ``probability`` (the
     posterior mass of the explanations holding one of the members in place of the named cause, the named one
-    included) and ``text`` (in words, with the ``femcheck plan`` call that designs the readings to separate them)."""
+    included) and ``text`` (in words, with the ``femcheck plan`` call that searches for readings to separate them;
+    where the two are one column at every reachable reading, e.g. springs in series, none exists)."""
     groups = []
     own = {_key(ex): (ex, p) for ex, p in zip(weighing.explanations, weighing.probability) if ex.payload is not None}
     for i, eff in enumerate(named.effects):
@@ -781,7 +782,8 @@ def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = A
         ids = ",".join(dict.fromkeys([eff.id] + [m["id"] for m in members]))
         text = (" \u2261 ".join([head["label"]] + [m["label"] for m in members])
                 + f": these readings cannot separate them (each fits within chi2 {limit:g} of the other, less than "
-                  f"3 reading sigmas of difference); measurements that would: femcheck plan CASE DATA.csv --effects {ids}")
+                  f"3 reading sigmas of difference); femcheck plan CASE DATA.csv --effects {ids} searches for readings "
+                  f"that would")
         groups.append({"cause": eff.id, "legs": head["legs"], "members": [head] + members,
                        "probability": float(min(mass, 1.0)), "text": text})
     return groups
