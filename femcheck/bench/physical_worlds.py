@@ -192,13 +192,18 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     from femcheck.diagnose.fe_model import FEAnchoredChainModel
     from femcheck.experiment.device_fe_world import DeviceFEWorld
     from femcheck.experiment.dial_gauge import dial_campaign
+    from femcheck.errors import ConvergenceError
     from femcheck.measured import process
     case = femcheck.load_case(CASE_PATH)
     w = draw_world(seed, case)
     t0 = time.process_time()
     world = DeviceFEWorld(case, leg_cases(case, w["changes"]), mesh=mesh)
-    readings = process(dial_campaign(case, {"device": world}, seed=w["data_seed"], directions=DIRECTIONS,
-                                     scatter_m=SCATTER_M).data, case)
+    try:
+        readings = process(dial_campaign(case, {"device": world}, seed=w["data_seed"], directions=DIRECTIONS,
+                                         scatter_m=SCATTER_M).data, case)
+    except ConvergenceError as exc:   # the world's own FE has no answer: no readings, the world is not scored
+        return {"seed": seed, "changes": w["changes"], "world_failed": str(exc).split(";")[0],
+                "cpu_s": round(time.process_time() - t0, 2)}
     t1 = time.process_time()
     snr = signal_to_noise(case, w["changes"], world, mesh)
     t2 = time.process_time()
@@ -285,6 +290,9 @@ def _rates(rows: list, suffix: str) -> dict:
 
 
 def summarize(rows: list) -> dict:
+    """The flat figures over the worlds whose FE answered (``worlds_failed`` those whose did not: not scored)."""
+    failed = [r["seed"] for r in rows if "world_failed" in r]
+    rows = [r for r in rows if "world_failed" not in r]
     singles = [r for r in rows if len(r["changes"]) == 1]
     pairs = [r for r in rows if len(r["changes"]) == 2]
     seen = [r for r in rows if r["detectable"]]
@@ -299,7 +307,8 @@ def summarize(rows: list) -> dict:
         named_pairs[key] = named_pairs.get(key, 0) + 1
     median = lambda k: round(float(np.median([r[k] for r in rows])), 2) if rows else None
     snr = {el: [c["snr"] for r in rows for c in r["changes"] if c["element"] == el] for el in sorted(ELEMENT.values())}
-    return {"singles": len(singles), **_rates(rows, ""), **_rates(seen, "_detectable"),
+    return {"worlds_drawn": len(rows) + len(failed), "worlds_failed": len(failed),
+            "worlds_failed_seeds": ", ".join(map(str, failed)), "singles": len(singles), **_rates(rows, ""), **_rates(seen, "_detectable"),
             "right_element_first_rate_singles": rate(singles, "right_element_first"),
             "right_element_first_rate_pairs": rate(pairs, "right_element_first"),
             "legs_right_rate": rate(rows, "legs_right"),
@@ -350,12 +359,15 @@ def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "co
 def table(figures: dict) -> str:
     """The confusion tables of the single changes (strict first named element; the first named alias group), from
     the rows the run kept (``make bench``'s summary)."""
-    rows = json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"]
+    rows = [r for r in json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"]
+            if "world_failed" not in r]
     return (confusion_table(rows) + "\n\nwith the alias groups the diagnosis declares:\n"
             + confusion_table(rows, "first_group"))
 
 
 def _line(r: dict) -> str:
+    if "world_failed" in r:
+        return f"seed {r['seed']}: {_short(r['changes'])} -> world FE failed: {r['world_failed']} (not scored)"
     groups = "; ".join(" \u2261 ".join(g["members"]) for g in r.get("alias_groups", []))
     snr = ", ".join(f"{c['snr']:.1f}" for c in r["changes"])
     return (f"seed {r['seed']}: {_short(r['changes'])} (SNR {snr}) -> {', '.join(r['named']) or 'none'}"
