@@ -290,7 +290,7 @@ def _rates(rows: list, suffix: str) -> dict:
 
 
 def summarize(rows: list) -> dict:
-    """The flat figures over the worlds whose FE answered (``worlds_failed`` those whose did not: not scored)."""
+    """The flat figures over the worlds whose FE answered (``worlds_failed_seeds`` those whose did not: not scored)."""
     failed = [r["seed"] for r in rows if "world_failed" in r]
     rows = [r for r in rows if "world_failed" not in r]
     singles = [r for r in rows if len(r["changes"]) == 1]
