@@ -115,6 +115,8 @@ class Diagnosis:
     sigma_note: str = ""
     #: :func:`clearance_needed` when the search named a clearance (None otherwise)
     clearance_check: dict | None = None
+    #: named causes the readings cannot separate from other element types on the same legs (:func:`alias_groups`)
+    alias_groups: tuple = ()
 
     @property
     def verdict(self) -> str:
@@ -206,7 +208,7 @@ class Diagnosis:
                 "noise_threshold_chi2": self.noise_threshold,
                 "baseline_weight_fit_heldout_error": self.baseline_error,
                 "folds": [list(f) for f in self.folds], "warnings": list(self.warnings),
-                "clearance_check": self.clearance_check,
+                "clearance_check": self.clearance_check, "alias_groups": list(self.alias_groups),
                 "steps": list(self.steps),
                 "placements": [{"id": p.effect.id, "legs": list(p.effect.legs), "screen_ebic": p.score,
                                 "screen_ebic_none": p.score_none, "t_per_leg": list(p.t), "one_factor": p.effect.uniform}
@@ -676,6 +678,117 @@ def share_collinear(marginals: dict, weighing: evidence.Weighing, collinear) -> 
     return out
 
 
+#: chi^2 within which a rival that holds another cause in place of a named one fits as well: the part of the named
+#: cause's fitted effect that the other cannot reproduce is then below 3 reading sigmas (chi^2 = z^2, z = 3), and
+#: these readings cannot separate the two (:func:`alias_swaps`, :func:`alias_groups`)
+ALIAS_CHI2 = 9.0
+
+
+def _swap_candidates(eff, located, reg) -> list:
+    """The causes that could stand in place of named cause ``eff`` on the same legs: every other located element type
+    at ``eff``'s legs (a uniform placement for a uniform or non-located ``eff``; an element whose uniform change has a
+    vocabulary id of its own, e.g. ``actuation_compliance``, by that id)."""
+    uniform = not getattr(eff, "located", False) or eff.uniform
+    out = []
+    for other in located:
+        if eff.located and other.element == eff.element:
+            continue
+        if uniform and other.uniform_cause:
+            cand = reg.get(other.uniform_cause)
+        else:
+            cand = other.uniform_all() if uniform else other.restricted(eff.legs)
+        if cand is not None and cand.id != eff.id and cand not in out:
+            out.append(cand)
+    return out
+
+
+def alias_swaps(model, readings, located, named: FitResult, rivals) -> list:
+    """Rivals that hold, in place of one named cause, another element type on the same legs (:func:`_swap_candidates`),
+    the other named causes kept: fitted jointly (the others from their named values) when not already weighed.
+
+    Elements of one leg act in series along it (the proximal tube and the U joint when the joints slip: two springs on
+    the link's line), so at the readings' points their changes can look alike. Weighed like every rival, the mass is
+    then shared between the placements the data cannot tell apart, and :func:`alias_groups` names them as one group.
+    Returns the new explanations."""
+    reg = effect_registry()
+    have = {_key(ex) for ex in rivals}
+    out = []
+    for i, eff in enumerate(named.effects):
+        others = [e for j, e in enumerate(named.effects) if j != i]
+        for cand in _swap_candidates(eff, located, reg):
+            effects = others[:i] + [cand] + others[i:]
+            if frozenset(effects) in have:
+                continue
+            values = [v for j, v in enumerate(named.values) if j != i]
+            start = np.concatenate(values[:i] + [cand.starts(model)[0]] + values[i:])
+            f = fit_effects(model, readings, effects, starts=[start], max_nfev=100)
+            have.add(frozenset(effects))
+            out.append(_explanation(f))
+    log.info("alias swaps of the named causes fitted: %d", len(out))
+    return out
+
+
+def _label(eff) -> str:
+    if getattr(eff, "located", False):
+        return f"{eff.id}[{'all' if eff.uniform else ','.join(map(str, eff.legs))}]"
+    return eff.id
+
+
+def _same_element(a, b) -> bool:
+    """Whether two causes move the same element alone (an element's uniform change that has a vocabulary id of its
+    own, e.g. ``actuation_compliance``, is that element's)."""
+    return (getattr(a, "uniform_cause", None) == b.id or getattr(b, "uniform_cause", None) == a.id
+            or (getattr(a, "located", False) and getattr(b, "located", False) and a.element == b.element))
+
+
+def _place(eff) -> tuple:
+    """The legs a cause moves (a cause of the whole device: all six)."""
+    return tuple(getattr(eff, "legs", ())) if getattr(eff, "located", False) else tuple(range(6))
+
+
+def alias_groups(named: FitResult, weighing: evidence.Weighing, limit: float = ALIAS_CHI2) -> list[dict]:
+    """For each named cause, the causes the readings cannot separate from it: those of another id on the same legs
+    (:func:`_place`) that take its place in a weighed rival (the other named causes at the same placements) whose
+    chi^2 is within ``limit`` of the named explanation's.
+
+    Returns one dict per named cause that has such partners: ``cause`` and ``legs`` of the named one, ``members``
+    (the named first; each ``id``, ``legs``, ``delta_chi2`` = rival chi^2 - named chi^2), ``probability`` (the
+    posterior mass of the explanations holding one of the members in place of the named cause, the named one
+    included) and ``text`` (in words, with the ``femcheck plan`` call that searches for readings to separate them;
+    where the two are one column at every reachable reading, e.g. springs in series, none exists)."""
+    groups = []
+    own = {_key(ex): (ex, p) for ex, p in zip(weighing.explanations, weighing.probability) if ex.payload is not None}
+    for i, eff in enumerate(named.effects):
+        others = [e for j, e in enumerate(named.effects) if j != i]
+        members, mass = [], 0.0
+        for key, (ex, p) in own.items():
+            extra = key - set(others)
+            if len(key) != len(named.effects) or len(extra) != 1:
+                continue
+            cand = next(iter(extra))
+            if cand == eff:
+                mass += p
+            elif (cand.id != eff.id and not _same_element(cand, eff) and _place(cand) == _place(eff)
+                  and abs(ex.chi2 - named.chi2) < limit):
+                members.append({"id": cand.id, "legs": list(getattr(cand, "legs", ())), "label": _label(cand),
+                                "delta_chi2": float(ex.chi2 - named.chi2)})
+                mass += p
+        if not members:
+            continue
+        # one member per cause id: its placement that fits closest to the named one
+        members = sorted({m["id"]: m for m in sorted(members, key=lambda m: -abs(m["delta_chi2"]))}.values(),
+                         key=lambda m: m["delta_chi2"])
+        head = {"id": eff.id, "legs": list(getattr(eff, "legs", ())), "label": _label(eff), "delta_chi2": 0.0}
+        ids = ",".join(dict.fromkeys([eff.id] + [m["id"] for m in members]))
+        text = (" \u2261 ".join([head["label"]] + [m["label"] for m in members])
+                + f": these readings cannot separate them (each fits within chi2 {limit:g} of the other, less than "
+                  f"3 reading sigmas of difference); femcheck plan CASE DATA.csv --effects {ids} searches for readings "
+                  f"that would")
+        groups.append({"cause": eff.id, "legs": head["legs"], "members": [head] + members,
+                       "probability": float(min(mass, 1.0)), "text": text})
+    return groups
+
+
 def heldout_losses(model, readings, chosen, fit: FitResult, cv: CrossValidation, cv_base: CrossValidation, folds,
                    known=None) -> dict:
     """{cause id: held-out mean relative deflection error lost (percentage points) when that cause is left out of the
@@ -701,7 +814,7 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
              bic_margin: float = 10.0, with_baseline: bool = True, rivals_pairs: bool = True,
              max_located: int = 1, evidence_method: str | None = None, likelihood: str | None = None,
              partner_leads: int = 1, located_siblings: bool = False, unweighed_mass: bool = True,
-             progress=None) -> Diagnosis:
+             aliases: bool = True, progress=None) -> Diagnosis:
     """Name the effects that explain ``readings`` beyond ``model`` (see module docstring). Located effects
     (``Effect.located``, the ``<element>_in_legs`` family) are screened for their legs first
     (:func:`femcheck.diagnose.placement.screen_placements`); the ``max_located`` best placements join the
@@ -710,6 +823,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     (:func:`located_partners`). ``evidence_method``: "laplace" | "bic" (default
     :data:`femcheck.diagnose.evidence.EVIDENCE`); ``likelihood``: "gauss" | "student" (default
     :data:`femcheck.diagnose.evidence.LIKELIHOOD`; "student" integrates sigma out when ``readings.sigma_dof`` > 0).
+    ``aliases``: weigh, for each named cause, the other element types on its legs in its place (:func:`alias_swaps`)
+    and report those the readings cannot separate from it as one group (:func:`alias_groups`).
     ``progress``: an object with ``plan(weights)`` (the expected relative cost of each phase, called once) and
     ``advance(1, description)`` (after each phase), e.g. :class:`femcheck.cli._progress.StageProgress`."""
     if evidence_method is not None and evidence_method not in evidence.EVIDENCE_METHODS:
@@ -814,6 +929,8 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
     if located and max_located > 0 and unweighed_mass:
         leads = _partner_leads(rivals, partner_leads, bic_margin) if max_effects >= 2 and rivals_pairs else []
         rivals += unweighed_explanations(model, readings, located, rivals, leads)
+    if located and max_located > 0 and chosen and aliases:
+        rivals += alias_swaps(model, readings, located, cur_fit, rivals)
     step("placements weighed")
     greedy_ids = tuple(e.id for e in chosen)
     greedy_key = frozenset(chosen)
@@ -892,6 +1009,10 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
         w = dataclasses.replace(w, ambiguous=True, ambiguity=(
             (w.ambiguity + "; " if w.ambiguity else "") + f"{pairs}: the data fix a combination, not each; their "
             f"probability is shared. Measurements that separate them: femcheck plan CASE DATA.csv --effects {ids}"))
+    groups = alias_groups(cur_fit, w) if aliases else []
+    if groups:
+        w = dataclasses.replace(w, ambiguous=True, ambiguity=(w.ambiguity + "; " if w.ambiguity else "")
+                                + "; ".join(g["text"] for g in groups))
     loss = heldout_losses(model, readings, chosen, cur_fit, cur_cv, cv_base, folds, known)
     causes = tuple(Cause(id=e.id, location=e.location(cur_fit.values[i], cur_fit.ci_low[i], cur_fit.ci_high[i]),
                          params=cur_fit.params(i), params_ci=cur_fit.params_ci(i), probability=marg[e.id],
@@ -917,4 +1038,4 @@ def diagnose(model, readings, *, candidates=None, max_effects: int = 2, n_folds:
                      warnings=tuple(cur_fit.warnings), noise_threshold=float(threshold), baseline_error=base_err,
                      readings=readings, weighing=w, placements=tuple(placements), lack_of_fit=lof,
                      partner_placements=tuple(partners), collinear=tuple(collinear), sigma_note=rival_note,
-                     clearance_check=clearance_check)
+                     clearance_check=clearance_check, alias_groups=tuple(groups))

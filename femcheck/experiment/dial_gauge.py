@@ -112,11 +112,13 @@ def _rotated(d, causes: dict) -> np.ndarray:
     return d
 
 
-def _change_rms(case, rows, poses, causes: dict, joints: str) -> float:
-    """RMS over the total readings of the change ``causes`` make to the deflection (total - preload), m."""
+def _change_rms(case, rows, poses, causes: dict, joints: str, nominal: np.ndarray | None = None) -> float:
+    """RMS over the total readings of the change ``causes`` make to the deflection (total - preload), m, against the
+    readings ``nominal`` (default: the case's chain)."""
     phase = rows[3]
     tot, pre = np.flatnonzero(phase == "total"), np.flatnonzero(phase == "preload")
-    nominal, world = _world(case, rows, poses, {}, joints), _world(case, rows, poses, causes, joints)
+    nominal = _world(case, rows, poses, {}, joints) if nominal is None else nominal
+    world = _world(case, rows, poses, causes, joints)
     change = (world[tot] - world[pre]) - (nominal[tot] - nominal[pre])
     return float(np.sqrt(np.mean(np.sum(change ** 2, axis=1))))
 
@@ -144,6 +146,27 @@ def _magnitude_at_snr(case, rows, poses, causes: dict, name: str, target_m: floa
     return with_mag(a1)
 
 
+def _protocol(case, directions, trials: int, sweep: bool):
+    """The campaign's reading rows and their poses."""
+    rows = protocol_rows(case, directions, trials, sweep)
+    point, direction, trial, phase, load, force = rows
+    n = len(point)
+    blank = MeasuredData(source="<dial campaign>", point=point, direction=direction, trial=trial, phase=phase,
+                         load_N=load, force=force, disp=np.zeros((n, 3)), row=np.arange(2, n + 2))
+    return rows, resolve_poses(blank, case)
+
+
+def device_change_rms(case, worlds, reference, *, directions=("+x", "+y", "+z"), trials: int = 3,
+                      sweep: bool = True) -> np.ndarray:
+    """(len(worlds),) RMS (m) over the campaign's total readings of the change of the deflection (total - preload)
+    from the device world ``reference`` to each of ``worlds`` (each with ``tcp_displacement(pose, force)``),
+    noise-free: the signal of a physical change, to set against the reading scatter (its signal-to-noise ratio,
+    module docstring)."""
+    rows, poses = _protocol(case, directions, trials, sweep)
+    nominal = _world(case, rows, poses, {"device": reference}, "rigid")
+    return np.array([_change_rms(case, rows, poses, {"device": w}, "rigid", nominal) for w in worlds])
+
+
 def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = None, trials: int = 3,
                   resolution_m: float = 1e-5, scatter_m: float = 3e-6, directions=("+x", "+y", "+z"),
                   sweep: bool = True, joints: str = "rigid") -> DialCampaign:
@@ -156,12 +179,8 @@ def dial_campaign(case, causes: dict, *, seed: int, snr: float | dict | None = N
     not rescaled by ``snr``). ``snr``: a number (or {cause: number}) that
     rescales each named cause to that signal-to-noise ratio (the sensor rotation keeps its axis). Seeded."""
     rng = np.random.default_rng(seed)
-    rows = protocol_rows(case, directions, trials, sweep)
+    rows, poses = _protocol(case, directions, trials, sweep)
     point, direction, trial, phase, load, force = rows
-    n = len(point)
-    blank = MeasuredData(source="<dial campaign>", point=point, direction=direction, trial=trial, phase=phase,
-                         load_N=load, force=force, disp=np.zeros((n, 3)), row=np.arange(2, n + 2))
-    poses = resolve_poses(blank, case)
     causes = dict(causes)
     if snr is not None:
         for name in [k for k in causes if k in CAUSES]:
