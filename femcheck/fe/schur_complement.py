@@ -4,34 +4,46 @@
 
 :func:`schur_complement` asks MKL PARDISO for it during the factorization (``iparm[35] = 1``, the
 retained rows marked in ``perm``): the elimination of the interior stops at the retained block, whose
-dense update *is* S, so no right-hand sides are back-substituted at all. Where pypardiso/MKL is not
-available, or PARDISO returns an error, the blockwise fallback factorizes K_ii and back-substitutes the
-retained columns (``BLOCK`` at a time). K_ii must be nonsingular; K_rr (and S) may be singular (floating
-bodies held only by their retained contact DOFs).
+dense update *is* S, so no right-hand sides are back-substituted at all. K_ii must be nonsingular; K_rr (and
+S) may be singular (floating bodies held only by their retained contact DOFs).
 
 :func:`condense` returns S together with the interior extension q_i = −K_ii⁻¹ K_ir u_r of a retained
 displacement (the recovery after a condensed contact solve) from the *same* factorization: PARDISO keeps
 its partial factorization LDLᵀ of K_ii and back-substitutes [0; u_r] (phase 333: the backward step with the
-retained part fixed at u_r gives x_i = −L_iiᵀ⁻¹ L_riᵀ u_r = −K_ii⁻¹ K_ir u_r); the blockwise path keeps its
-per-body factorizations. No second factorization of the interior is made.
+retained part fixed at u_r gives x_i = −L_iiᵀ⁻¹ L_riᵀ u_r = −K_ii⁻¹ K_ir u_r).
 
-Without MKL, :func:`_cholmod_schur` gets S from CHOLMOD's supernodal Cholesky (cvxopt) in the same way
-as PARDISO does: the interior is ordered first (AMD on K_ii) and the retained DOFs last, so the trailing
-block of the factor is the Cholesky factor of the Schur complement (George & Liu 1981, §2.3):
+Without MKL (or where PARDISO fails) the condensation goes body by body: K_ii is block diagonal, one block per
+body (the bodies meet only at retained DOFs), so S = K_rr − Σ_b K_rb K_bb⁻¹ K_br and only one body's factor is
+in memory at a time. Each body's S_b comes from CHOLMOD's supernodal Cholesky (cvxopt) in the same way as
+PARDISO's: the body's interior is ordered first (METIS nested dissection where pymetis is installed, else AMD:
+:func:`fill_reducing_order`) and its retained DOFs last, so the trailing block of the factor is the Cholesky
+factor of the Schur complement (George & Liu 1981, §2.3):
 
     P K_δ Pᵀ = L Lᵀ,  L = [[L_ii, 0], [L_ri, L_rr]]  ⇒  K_δ,rr − K_ri K_ii⁻¹ K_ir = L_rr L_rrᵀ,
 
 where K_δ = K + δ E_r adds δ to the retained diagonal only. S itself may be singular (floating bodies),
 S + δ I is positive definite for any δ > 0, and S = L_rr L_rrᵀ − δ I exactly (S is linear in K_rr);
-δ is the mean retained diagonal, so the subtraction loses no more than round-off of S's own scale. The
-interior extension factorizes K_ii once per body after that factor is released (cvxopt exposes the factor
-only as a copy that leaves it unusable for solves, and the bodies' own fill-reducing orderings keep the
-memory below that of the constrained ordering). Without MKL, systems up to ``CHOLMOD_SCHUR_MAX_DOFS`` unknowns take
-the CHOLMOD path and larger ones the blockwise back-substitution (one forward and backward solve per retained column,
-bounded memory); ``FEMCHECK_SCHUR_METHOD=cholmod`` or ``blockwise`` forces one. Measured on the universal joint's default level (371,298 DOFs, 5,730 retained,
-``check_joint(case, "universal", "default")`` with ``FEMCHECK_LINEAR_SOLVER=cholmod``, load average ≈ 1–2):
-CHOLMOD path 146.9 s wall, peak RSS 14.9 GB (the AMD-ordered factor and the copy cvxopt's ``getfactor``
-makes of it); blockwise > 900 s (killed) at ≈ 6 GB; PARDISO 49–67 s at ≈ 5.2 GB.
+δ is the mean retained diagonal, so the subtraction loses no more than round-off of S's own scale. L_rr is
+read in place from CHOLMOD's supernodal arrays (:func:`_supernodal_trailing_block`, every field checked), and the
+same factor then serves the extension (:class:`_FactorInterior`); where the factor's layout is not the one known,
+cvxopt's copy of the whole factor gives L_rr and K_ii is factorized once more for the extension.
+
+Memory: before factorizing, the factor's nonzeros are counted exactly from the elimination tree
+(:func:`factor_nonzeros`); a body whose partial factor would exceed the budget (``$FEMCHECK_SCHUR_MEMORY_GB``,
+default :data:`DEFAULT_MEMORY_GB`) is condensed by back-substitution instead: its K_ii factorized once and the
+retained columns solved in blocks sized to what the budget leaves beside that factor (:func:`_block_columns`).
+``FEMCHECK_SCHUR_METHOD=blockwise`` forces the back-substitution for every body, ``cholmod`` (the default) the
+partial factorization where it fits.
+
+Measured, no MKL, the matrices of the joints' coarse level (what ``femcheck verify`` condenses), one core at load
+average 9–12, :func:`condense` wall time and peak resident memory of the process (matrix loaded first):
+
+    universal (234,510 unknowns, 2,970 retained, 5 bodies): METIS 39.3 s, 2.09 GB; AMD 54.4 s, 2.98 GB
+                (all at once with AMD and cvxopt's copy of the factor, before: 118.6 s, 6.89 GB; PARDISO 37.3 s, 2.13 GB)
+    spherical  (92,361 unknowns, 2,226 retained, 2 bodies): METIS 14.3 s, 1.15 GB; AMD 21.9 s, 1.47 GB
+                (before: 33.5 s, 2.74 GB; PARDISO 6.4 s, 0.93 GB)
+
+S agrees with PARDISO's to 9e-14 (universal) and 2.5e-13 (spherical) of max |S|; the extension to 2e-11.
 """
 from __future__ import annotations
 
@@ -48,13 +60,13 @@ log = logging.getLogger(__name__)
 
 #: environment variable: gigabytes that one condensation without MKL may hold for a body's factor and its blocks
 MEMORY_VAR = "FEMCHECK_SCHUR_MEMORY_GB"
-#: its default: the universal joint's largest body at the coarse level (the level ``femcheck verify`` uses) needs
-#: 2.8 GB by nested dissection and 4.9 GB by AMD (module doc), so both fit; the 8 GB peak of the whole verify
-#: run leaves room beside it for the assembled meshes and the kept models
-DEFAULT_MEMORY_GB = 5.0
+#: its default: the universal joint's largest body at the coarse level (the level ``femcheck verify`` uses, 86 M
+#: nonzeros in L by nested dissection, 153 M by AMD) needs 1.4 and 2.4 GB, so it fits with either order, and the
+#: 8 GB peak of the whole verify run leaves room beside it for the assembled meshes and the kept models
+DEFAULT_MEMORY_GB = 4.0
 #: resident bytes per nonzero of L during a partial factorization read in place: CHOLMOD's supernodal values
-#: (8 B) with their padding and the assembly's transients (measured: module doc)
-BYTES_PER_FACTOR_NONZERO = 12
+#: (8 B) with their padding and the assembly's transients (measured 14–15 B per counted nonzero: module doc)
+BYTES_PER_FACTOR_NONZERO = 16
 #: the same where the factor can only be copied out (cvxopt's ``getfactor``): the supernodal factor and its
 #: simplicial copy (8 B value + 8 B row index) at once (measured 31 B per nonzero: module doc)
 BYTES_PER_COPIED_NONZERO = 32
@@ -74,8 +86,9 @@ def schur_complement(K, r: np.ndarray, *, method: str = "auto") -> np.ndarray:
 
 class SchurCondensation:
     """S = K_rr − K_ri K_ii⁻¹ K_ir (``S``, (n_r, n_r) dense) and the interior extension of a retained
-    displacement from the same factorization (:meth:`extend`). ``method`` "pardiso" | "blockwise";
-    ``factorizations`` made (PARDISO: 1, blockwise: one per body touching r); ``seconds`` wall time of S."""
+    displacement from the same factorization (:meth:`extend`). ``method`` "pardiso" | "cholmod" (every body by
+    partial factorization) | "blockwise" (some body back-substituted); ``factorizations`` made (PARDISO: 1, else
+    one per body touching r, two where CHOLMOD's factor had to be copied out); ``seconds`` wall time of S."""
 
     def __init__(self, K, r, S, method: str, factorizations: int, seconds: float, extend_fn, free_fn=None):
         self.n = K.shape[0]
