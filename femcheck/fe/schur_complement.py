@@ -282,7 +282,11 @@ def fill_reducing_order(A) -> np.ndarray:
     Q = _symmetric_graph(E.T @ G @ E) if m > 1 else sp.csr_matrix((m, m))
     if m <= 2 or Q.nnz == 0:
         return np.arange(n, dtype=np.int64)
-    perm, _ = pymetis.nested_dissection(xadj=Q.indptr.astype(np.int64), adjncy=Q.indices.astype(np.int64))
+    xadj, adjncy = Q.indptr.astype(np.int64), Q.indices.astype(np.int64)
+    if hasattr(pymetis, "CSRAdjacency"):   # pymetis 2025 on; the xadj/adjncy keywords are deprecated there
+        perm, _ = pymetis.nested_dissection(adjacency=pymetis.CSRAdjacency(xadj, adjncy))
+    else:
+        perm, _ = pymetis.nested_dissection(xadj=xadj, adjncy=adjncy)
     rank = np.empty(m, np.int64)
     rank[np.asarray(perm, dtype=np.int64)] = np.arange(m)
     return np.argsort(rank[group], kind="stable").astype(np.int64)
