@@ -19,8 +19,8 @@ scikit-fem's generic ``asm`` of the same weak form, ``<key>_assembly_speedup`` t
 ``<key>_assembly_rel_diff`` max |K − K_skfem| / max |K_skfem| (round-off), on the levels of
 ``ASSEMBLY_COMPARE_LEVELS`` (the skfem form of the fine universal mesh alone needs > 6 GB). Non-MKL path:
 ``<key>_nonmkl_wall_s`` (and ``_nonmkl_iterations``, ``_nonmkl_factorizations``, ``_nonmkl_solver``) the
-same check with the linear solver set to CHOLMOD (cvxopt; blockwise Schur complement, one supernodal
-factorization per body reused for the recovery) on the joints and levels of ``NONMKL_LEVELS``, and
+same check with the linear solver set to CHOLMOD (cvxopt; the Schur complement by one partial supernodal
+factorization per body, reused for the recovery) on the joints and levels of ``NONMKL_LEVELS``, and
 ``<key>_nonmkl_max_compliance_diff_pct`` its largest component difference from the MKL run (%).
 A level that fails records ``<joint>_<level>_error`` (the exception text) instead of numbers.
 """
@@ -39,8 +39,7 @@ JOINT_LEVELS = {"spherical": LEVELS, "universal": LEVELS}
 
 #: levels with the side-by-side skfem assembly, and with the non-MKL (CHOLMOD) rerun of the check
 ASSEMBLY_COMPARE_LEVELS = ("coarse", "default")
-#: (universal: the blockwise Schur complement with CHOLMOD back-substitutes 5,730 retained columns through a
-#: 198 k-unknown body: > 15 min on this machine, so it is measured by hand, docs/verify.md, not here)
+#: (universal: its non-MKL condensation is timed by the verify area's no-MKL step, make_verify_nomkl_s)
 NONMKL_LEVELS = {"spherical": ("default",), "universal": ()}
 
 

@@ -33,7 +33,8 @@ ROOT = Path(__file__).resolve().parents[2]
 STEPS = ("install", "cold", "warm", "nomkl", "test")
 #: environment variables of this process that must not leak into the clone's runs (they would point it at
 #: this checkout's caches or choices)
-CLEARED = ("FEMCHECK_CACHE", "FEMCHECK_LINEAR_SOLVER", "FEMCHECK_SCHUR_METHOD", "FEMCHECK_NO_PARDISO",
+CLEARED = ("FEMCHECK_CACHE", "FEMCHECK_LINEAR_SOLVER", "FEMCHECK_SCHUR_METHOD", "FEMCHECK_SCHUR_MEMORY_GB",
+           "FEMCHECK_NO_PARDISO",
            "FEMCHECK_NO_RESULT_CACHE", "PYTHONPATH", "VIRTUAL_ENV")
 
 

@@ -346,7 +346,7 @@ def _prune(B) -> sp.csr_matrix:
 
 def _condense(K, C, pairs, cand, ref_b):
     """Schur complement of Tᵀ K T onto the candidate-contact DOFs and node b (module doc;
-    :func:`femcheck.fe.schur_complement.schur_complement`: PARDISO's own, else blockwise per body)."""
+    :func:`femcheck.fe.schur_complement.schur_complement`: PARDISO's own, else CHOLMOD's per body)."""
     from femcheck.fe.constraints import pad
     from femcheck.fe.schur_complement import condense
 
