@@ -24,9 +24,11 @@ $(STAMP): pyproject.toml
 verify: $(STAMP)
 	$(PY) -m femcheck verify $(CASE) --out reports/verify --check
 
-## Default test suite (CI): everything not marked slow
+## Default test suite (CI): everything not marked slow, in TEST_JOBS processes (pytest-xdist; 2 = the CI machine's
+## cores, each process peaks at about 2.3 GB); TEST_JOBS=0 runs it in this process
+TEST_JOBS ?= 2
 test: $(STAMP)
-	$(PY) -m pytest -m "not slow" -q
+	$(PY) -m pytest -m "not slow" -q -n $(TEST_JOBS)
 
 ## Whole test suite including the slow FE cases
 test-all: $(STAMP)

@@ -189,7 +189,8 @@ def test_documented_command_line_runs(line, error, tmp_path, monkeypatch, capsys
 
 
 # ---------------------------------------------------------------------------------------------- process words
-PRODUCT = ["docs", "README.md", "femcheck", "geometry", "cases", "examples", "Makefile", "reports/README.md"]
+PRODUCT = ["docs", "README.md", "femcheck", "geometry", "cases", "examples", "Makefile", "reports/README.md", "pyproject.toml",
+           ".ci"]
 
 #: words about how the product was developed; domain words (a Dask worker, a helper function) are not matched
 PROCESS_WORDS = re.compile(
