@@ -59,7 +59,7 @@ _LADDER_TOL = 1e-10
 
 
 # ---------------------------------------------------------------- small dense algebra (explicit loops, size m)
-@njit(cache=True, error_model="numpy")
+@njit("boolean(f8[:, ::1], f8[:, ::1], i8)", cache=True, error_model="numpy")
 def _chol(A, Lf, m):
     """Lower Cholesky factor of A[:m, :m] into Lf; False if not positive definite."""
     for j in range(m):
@@ -77,7 +77,7 @@ def _chol(A, Lf, m):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[::1], f8[::1], i8)", cache=True, error_model="numpy")
 def _chol_forward(Lf, b, x, m):
     """x[:m] = Lf^-1 b (forward substitution). With :func:`_chol_back`, the solve with Lf Lf^T: two leaves (one
     function holding both loops counts references, see :func:`_rot`)."""
@@ -88,7 +88,7 @@ def _chol_forward(Lf, b, x, m):
         x[i] = s / Lf[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[::1], i8)", cache=True, error_model="numpy")
 def _chol_back(Lf, x, m):
     """x[:m] = Lf^-T x in place (back substitution)."""
     for ii in range(m):
@@ -99,7 +99,7 @@ def _chol_back(Lf, x, m):
         x[i] = s / Lf[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[:, ::1], i8)", cache=True, error_model="numpy")
 def _chol_inverse(Lf, out, m):
     """out[:m, :m] = (Lf Lf^T)^-1 = Lf^-T Lf^-1 from the Cholesky factor Lf, symmetric by construction.
 
@@ -285,7 +285,7 @@ def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw, c):
 
 
 # ---------------------------------------------------------------- closed forms
-@njit(cache=True, error_model="numpy")
+@njit("f8(f8[::1], f8[::1], f8[::1], f8[::1], i8, boolean)", cache=True, error_model="numpy")
 def _sp1(w, p, z, cs, k, angle):
     """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2]);
     the angle itself (an arctan2) only if ``angle``, else 0."""
@@ -343,7 +343,7 @@ def _sp2_z(w1, w2, p, qv, z):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[:, ::1], f8[::1], i8, f8[:, ::1], f8[:, ::1])", cache=True, error_model="numpy")
 def _cardan(daxis_s, Rs, q, k0, A, T):
     """S joint angles q[k0:k0+3] with Rot(s1, q1) Rot(s2, q2) Rot(s3, q3) = Rs, s orthonormal right-handed."""
     for i in range(3):
@@ -361,7 +361,7 @@ def _cardan(daxis_s, Rs, q, k0, A, T):
     q[k0 + 2] = math.atan2(-T[0, 1], T[0, 0])
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], f8[:, ::1], i8, f8[:, ::1], f8[::1], f8[::1])", cache=True, error_model="numpy")
 def _set_transform(Rp, tp, k, R, c_from, c_to):
     """Prefix k: x -> R (x - c_from) + c_to, i.e. Rp[k] = R, tp[k] = c_to - R c_from."""
     for i in range(3):
@@ -370,7 +370,7 @@ def _set_transform(Rp, tp, k, R, c_from, c_to):
         tp[k, i] = c_to[i] - (R[i, 0] * c_from[0] + R[i, 1] * c_from[1] + R[i, 2] * c_from[2])
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], boolean)", cache=True, error_model="numpy")
 def _set_twist(tw, k, R, a, C, c, revolute):
     """tw[k] = [w x (C - c); w] (revolute) or [w; 0] (slide), w = R a."""
     w0 = R[0, 0] * a[0] + R[0, 1] * a[1] + R[0, 2] * a[2]
@@ -407,13 +407,13 @@ def _s_axes(R, A, T, q1, out):
             out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], i8, i8, f8[::1])", cache=True, error_model="numpy")
 def _row(A, l, k, out):
     """out (3,) = A[l, k] copied (no view)."""
     out[0], out[1], out[2] = A[l, k, 0], A[l, k, 1], A[l, k, 2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], f8[:, :, ::1], i8, i8, i8, i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])", cache=True, error_model="numpy")
 def _slide_u_s(daxis, cen, l, k_p, k_u, m_s, m_u, a_u, a_1, a_2, c_S, c_U):
     """The axes and centres the P-S-U / U-P-S closed forms read, copied (a leaf: element by element, no calls):
     the slide a_u = daxis[l, k_p], the U axes a_1, a_2 = daxis[l, k_u], daxis[l, k_u + 1], the S and U centres
@@ -432,7 +432,7 @@ def _row2(A, k, out):
     out[0], out[1], out[2] = A[k, 0], A[k, 1], A[k, 2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], i8, i8, f8[:, ::1])", cache=True, error_model="numpy")
 def _rows3(A, l, k, out):
     """out (3, 3) = A[l, k:k+3] copied (no view)."""
     for j in range(3):
@@ -450,7 +450,7 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
     C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
     """
-    _ik_range(tab, R_t, C_t, numeric_only, True, 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
+    _ik_range(tab, R_t, C_t, numeric_only, np.bool_(True), 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
               tw_out, lR_out, len_out)
 
 
@@ -887,7 +887,8 @@ def _ladder_c(F, n, Fs, ds):
     return pk * math.exp(math.log(ds[k]) + pk * (x - lf)) / math.exp(x)
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(i8, i8, i8, i8[:, :, ::1], f8[:, :, :, ::1], i8[:, ::1], f8[::1], i8, f8[:, :, ::1], f8[:, :, :, ::1],"
+       "f8[:, :, :, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1])", cache=True, error_model="numpy")
 def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, scale, Ae, V):
     """Ae (m, m) = N^T S_e N of leg l's FE-measured joint laws, the constant ones (``which`` 0) or those with a force
     ladder (1: S_zz replaced by the current axial compliance cl[j], its row and column scaled by sqrt(cl / S_zz)):
@@ -1475,7 +1476,7 @@ def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, P,
     for p0 in range(0, n, B):
         p1 = min(n, p0 + B)
         _pose_targets(P, p0, p1, tab[19], tab[16], R_b, C_b)
-        _ik_range(tab, R_b, C_b, False, False, 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
+        _ik_range(tab, R_b, C_b, np.bool_(False), np.bool_(False), 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
         for p in range(p0, p1):
             for l in range(L):
                 if not ok[l, p - p0]:
