@@ -450,7 +450,7 @@ def ik_kernel(tab, R_t, C_t, numeric_only, q_out, res_out, ok_out, closed_out, C
     Outputs (leg-major, padded): q (L, n, nd), residual (L, n), ok (L, n), closed (L, n) closed form used,
     C (L, n, 3), centres (L, n, nc, 3), twists (L, n, nd, 6), link_R (L, n, nl, 3, 3), link_length (L, n, nl).
     """
-    _ik_range(tab, R_t, C_t, numeric_only, np.bool_(True), 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
+    _ik_range(tab, R_t, C_t, numeric_only, True, 0, R_t.shape[0], q_out, res_out, ok_out, closed_out, C_out, cen_out,
               tw_out, lR_out, len_out)
 
 
@@ -1476,7 +1476,7 @@ def evaluate_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, P,
     for p0 in range(0, n, B):
         p1 = min(n, p0 + B)
         _pose_targets(P, p0, p1, tab[19], tab[16], R_b, C_b)
-        _ik_range(tab, R_b, C_b, np.bool_(False), np.bool_(False), 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
+        _ik_range(tab, R_b, C_b, False, False, 0, p1 - p0, q, res, ok, closed, C, cen, tw, lR, llen)
         for p in range(p0, p1):
             for l in range(L):
                 if not ok[l, p - p0]:
