@@ -993,7 +993,7 @@ def chain_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, C, ce
     Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration).
     ``c_rot`` > 0 (rigid joints): the joint-rotation compliance of every S and U joint (:func:`_joint_rotation_forms`)."""
     return _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, tcp, wrench,
-                        scale, 0, tcp.shape[0],
+                        scale, np.int64(0), tcp.shape[0],   # p0 not a literal: one specialization with the fused kernel
                         K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
 
 
