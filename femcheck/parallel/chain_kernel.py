@@ -413,7 +413,8 @@ def _row(A, l, k, out):
     out[0], out[1], out[2] = A[l, k, 0], A[l, k, 1], A[l, k, 2]
 
 
-@njit("void(f8[:, :, ::1], f8[:, :, ::1], i8, i8, i8, i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])", cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], f8[:, :, ::1], i8, i8, i8, i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+      cache=True, error_model="numpy")
 def _slide_u_s(daxis, cen, l, k_p, k_u, m_s, m_u, a_u, a_1, a_2, c_S, c_U):
     """The axes and centres the P-S-U / U-P-S closed forms read, copied (a leaf: element by element, no calls):
     the slide a_u = daxis[l, k_p], the U axes a_1, a_2 = daxis[l, k_u], daxis[l, k_u + 1], the S and U centres
