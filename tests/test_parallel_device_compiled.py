@@ -226,3 +226,49 @@ def test_fused_path_checks_a_limit_on_a_passive_joint():
     ok = P[state.ok]
     a, b = evaluate(dev, ok, [0, 0, 10, 0, 0, 0]), evaluate(dev, ok, [0, 0, 10, 0, 0, 0], state=solve_legs(dev, ok))
     assert _rel(b.K, a.K) < 1e-12
+
+
+_VARIANT_SCRIPT = """
+import json, numpy as np
+from numba.core.registry import CPUDispatcher
+from femcheck.case import load_case
+from femcheck.chain import evaluate as chain_evaluate
+from femcheck.parallel.chain_model import evaluate
+from femcheck.parallel.device import test_points
+from femcheck.parallel.leg_kinematics import solve_legs
+import femcheck.parallel.chain_kernel as kern
+W = [1, 2, 10, 0.1, 0, 0.2]
+for name in ("hexapod_6ups", "delta_3ruu"):
+    case = load_case(f"cases/{name}.toml")
+    for joints in ("rigid", "released"):
+        P = test_points(case)[:2]
+        evaluate(case.device, P, W, joints=joints)                                       # fused kernel
+        evaluate(case.device, P, W, joints=joints, state=solve_legs(case.device, P))     # state path
+psu = load_case("cases/haptic_6psu.toml")
+for joints in ("rigid", "released"):
+    chain_evaluate(psu, test_points(psu)[:2], W, model="detailed", joints=joints)
+print(json.dumps({k: len(f.signatures) for k, f in vars(kern).items() if isinstance(f, CPUDispatcher)}))
+"""
+
+
+@pytest.mark.slow
+def test_every_kernel_function_compiles_one_specialization(tmp_path):
+    # numba compiles a function once per distinct argument typing (array layout C/A, ndim, readonly, and
+    # literal constants from a jitted caller); each variant adds to the ~1 min cold first compile of the kernel.
+    # With an empty cache (a cached load records no helper signatures) every function of the module must have
+    # compiled at most once after the three reference devices ran in both joint idealizations.
+    import json
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(ROOT))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    run = subprocess.run([sys.executable, "-c", _VARIANT_SCRIPT], cwd=ROOT, env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    counts = json.loads(run.stdout.strip().splitlines()[-1])
+    assert counts["evaluate_kernel"] == 1, counts   # the check ran the compiled path
+    # _ik_range: the full-state inverse kinematics (ik_kernel) and the fused kernel's reduced one are two
+    # specializations on purpose: the fused one's constant flags drop the full-state branches (measured ~8% more
+    # released poses/s, at the same cold compile time as one flag-generic specialization)
+    assert counts["_ik_range"] <= 2, counts
+    assert {k: c for k, c in counts.items() if c > 1 and k != "_ik_range"} == {}

@@ -59,7 +59,7 @@ _LADDER_TOL = 1e-10
 
 
 # ---------------------------------------------------------------- small dense algebra (explicit loops, size m)
-@njit(cache=True, error_model="numpy")
+@njit("boolean(f8[:, ::1], f8[:, ::1], i8)", cache=True, error_model="numpy")
 def _chol(A, Lf, m):
     """Lower Cholesky factor of A[:m, :m] into Lf; False if not positive definite."""
     for j in range(m):
@@ -77,7 +77,7 @@ def _chol(A, Lf, m):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[::1], f8[::1], i8)", cache=True, error_model="numpy")
 def _chol_forward(Lf, b, x, m):
     """x[:m] = Lf^-1 b (forward substitution). With :func:`_chol_back`, the solve with Lf Lf^T: two leaves (one
     function holding both loops counts references, see :func:`_rot`)."""
@@ -88,7 +88,7 @@ def _chol_forward(Lf, b, x, m):
         x[i] = s / Lf[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[::1], i8)", cache=True, error_model="numpy")
 def _chol_back(Lf, x, m):
     """x[:m] = Lf^-T x in place (back substitution)."""
     for ii in range(m):
@@ -99,7 +99,7 @@ def _chol_back(Lf, x, m):
         x[i] = s / Lf[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[:, ::1], i8)", cache=True, error_model="numpy")
 def _chol_inverse(Lf, out, m):
     """out[:m, :m] = (Lf Lf^T)^-1 = Lf^-T Lf^-1 from the Cholesky factor Lf, symmetric by construction.
 
@@ -285,7 +285,7 @@ def _twists(l, i_n, dkind, daxis, dpoint, Rp, tp, C, tw, c):
 
 
 # ---------------------------------------------------------------- closed forms
-@njit(cache=True, error_model="numpy")
+@njit("f8(f8[::1], f8[::1], f8[::1], f8[::1], i8, boolean)", cache=True, error_model="numpy")
 def _sp1(w, p, z, cs, k, angle):
     """Paden-Kahan subproblem 1: the angle rotating p into z about the unit axis w (its cos, sin into cs[k:k+2]);
     the angle itself (an arctan2) only if ``angle``, else 0."""
@@ -343,7 +343,7 @@ def _sp2_z(w1, w2, p, qv, z):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], f8[:, ::1], f8[::1], i8, f8[:, ::1], f8[:, ::1])", cache=True, error_model="numpy")
 def _cardan(daxis_s, Rs, q, k0, A, T):
     """S joint angles q[k0:k0+3] with Rot(s1, q1) Rot(s2, q2) Rot(s3, q3) = Rs, s orthonormal right-handed."""
     for i in range(3):
@@ -361,7 +361,7 @@ def _cardan(daxis_s, Rs, q, k0, A, T):
     q[k0 + 2] = math.atan2(-T[0, 1], T[0, 0])
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], f8[:, ::1], i8, f8[:, ::1], f8[::1], f8[::1])", cache=True, error_model="numpy")
 def _set_transform(Rp, tp, k, R, c_from, c_to):
     """Prefix k: x -> R (x - c_from) + c_to, i.e. Rp[k] = R, tp[k] = c_to - R c_from."""
     for i in range(3):
@@ -370,7 +370,7 @@ def _set_transform(Rp, tp, k, R, c_from, c_to):
         tp[k, i] = c_to[i] - (R[i, 0] * c_from[0] + R[i, 1] * c_from[1] + R[i, 2] * c_from[2])
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, ::1], i8, f8[:, ::1], f8[::1], f8[::1], f8[::1], boolean)", cache=True, error_model="numpy")
 def _set_twist(tw, k, R, a, C, c, revolute):
     """tw[k] = [w x (C - c); w] (revolute) or [w; 0] (slide), w = R a."""
     w0 = R[0, 0] * a[0] + R[0, 1] * a[1] + R[0, 2] * a[2]
@@ -407,13 +407,14 @@ def _s_axes(R, A, T, q1, out):
             out[k, i] = R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], i8, i8, f8[::1])", cache=True, error_model="numpy")
 def _row(A, l, k, out):
     """out (3,) = A[l, k] copied (no view)."""
     out[0], out[1], out[2] = A[l, k, 0], A[l, k, 1], A[l, k, 2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], f8[:, :, ::1], i8, i8, i8, i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+      cache=True, error_model="numpy")
 def _slide_u_s(daxis, cen, l, k_p, k_u, m_s, m_u, a_u, a_1, a_2, c_S, c_U):
     """The axes and centres the P-S-U / U-P-S closed forms read, copied (a leaf: element by element, no calls):
     the slide a_u = daxis[l, k_p], the U axes a_1, a_2 = daxis[l, k_u], daxis[l, k_u + 1], the S and U centres
@@ -432,7 +433,7 @@ def _row2(A, k, out):
     out[0], out[1], out[2] = A[k, 0], A[k, 1], A[k, 2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(f8[:, :, ::1], i8, i8, f8[:, ::1])", cache=True, error_model="numpy")
 def _rows3(A, l, k, out):
     """out (3, 3) = A[l, k:k+3] copied (no view)."""
     for j in range(3):
@@ -887,7 +888,8 @@ def _ladder_c(F, n, Fs, ds):
     return pk * math.exp(math.log(ds[k]) + pk * (x - lf)) / math.exp(x)
 
 
-@njit(cache=True, error_model="numpy")
+@njit("void(i8, i8, i8, i8[:, :, ::1], f8[:, :, :, ::1], i8[:, ::1], f8[::1], i8, f8[:, :, ::1], f8[:, :, :, ::1],"
+       "f8[:, :, :, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1])", cache=True, error_model="numpy")
 def _measured_law_form(l, p, m, ml_i, ml_S, ml_n, cl, which, C, cen, lR, Nb, scale, Ae, V):
     """Ae (m, m) = N^T S_e N of leg l's FE-measured joint laws, the constant ones (``which`` 0) or those with a force
     ladder (1: S_zz replaced by the current axial compliance cl[j], its row and column scaled by sqrt(cl / S_zz)):
@@ -992,7 +994,7 @@ def chain_kernel(hertz, cantilever, tab, detailed, released, shear, c_rot, C, ce
     Modes: 0 no Hertz point (fixed), 1 m = 1 (a two-force leg: scalars), 2 Woodbury (3x3 per iteration).
     ``c_rot`` > 0 (rigid joints): the joint-rotation compliance of every S and U joint (:func:`_joint_rotation_forms`)."""
     return _chain_range(hertz, cantilever, tab, detailed, released, shear, c_rot, C, cen, tw, lR, llen, tcp, wrench,
-                        scale, 0, tcp.shape[0],
+                        scale, np.int64(0), tcp.shape[0],   # p0 not a literal: one specialization with the fused kernel
                         K_out, S_out, t_out, KL_out, WC_out, energy_out, kh_out, iters_out)
 
 
