@@ -18,6 +18,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'
 	-$(PY) -m pip install --quiet 'pypardiso>=0.4'
+	$(PY) -m femcheck.parallel.precompile
 	touch $(STAMP)
 
 ## Main job on the reference case: analytical (and FE, where available) verification tables under reports/verify/

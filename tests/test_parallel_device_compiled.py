@@ -229,25 +229,9 @@ def test_fused_path_checks_a_limit_on_a_passive_joint():
 
 
 _VARIANT_SCRIPT = """
-import json, numpy as np
-from numba.core.registry import CPUDispatcher
-from femcheck.case import load_case
-from femcheck.chain import evaluate as chain_evaluate
-from femcheck.parallel.chain_model import evaluate
-from femcheck.parallel.device import test_points
-from femcheck.parallel.leg_kinematics import solve_legs
-import femcheck.parallel.chain_kernel as kern
-W = [1, 2, 10, 0.1, 0, 0.2]
-for name in ("hexapod_6ups", "delta_3ruu"):
-    case = load_case(f"cases/{name}.toml")
-    for joints in ("rigid", "released"):
-        P = test_points(case)[:2]
-        evaluate(case.device, P, W, joints=joints)                                       # fused kernel
-        evaluate(case.device, P, W, joints=joints, state=solve_legs(case.device, P))     # state path
-psu = load_case("cases/haptic_6psu.toml")
-for joints in ("rigid", "released"):
-    chain_evaluate(psu, test_points(psu)[:2], W, model="detailed", joints=joints)
-print(json.dumps({k: len(f.signatures) for k, f in vars(kern).items() if isinstance(f, CPUDispatcher)}))
+import json
+from femcheck.parallel.precompile import compile_kernels
+print(json.dumps(compile_kernels()))
 """
 
 
