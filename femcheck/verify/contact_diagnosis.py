@@ -33,15 +33,32 @@ class ContactDiagnosis:
         return rows
 
 
-def diagnose_contact_fe(case, fe, friction=None) -> ContactDiagnosis:
-    """Virtual experiment from the contact FE of ``fe`` (a detailed-level ``FEVerification`` at P0..P8) and
-    its diagnosis against the rigid and the released detailed analytical models."""
+def _diagnosed(case, joints: str, readings) -> dict:
+    """The diagnosis JSON of ``readings`` against the detailed analytical model with ``joints``."""
     from femcheck.diagnose import AnalyticalChainModel, diagnose
+    return diagnose(AnalyticalChainModel(case, "detailed", joints), readings).as_json()
+
+
+def diagnose_contact_fe(case, fe, friction=None, jobs: int = 1) -> ContactDiagnosis:
+    """Virtual experiment from the contact FE of ``fe`` (a detailed-level ``FEVerification`` at P0..P8) and
+    its diagnosis against the rigid and the released detailed analytical models. ``jobs`` >= 2: the released
+    diagnosis runs in a second process beside the rigid one (the two are independent and each takes tens of
+    seconds of model evaluations)."""
+    import concurrent.futures as cf
+    import multiprocessing
+
     from femcheck.diagnose.fe_model import DeviceFEReadingModel
     from femcheck.experiment.simulate import simulate
     from femcheck.measured.protocol import process
+    from femcheck.sweep.executor import pool_start_method
 
     ve = simulate(case, (), seed=NOISE_SEED, model=DeviceFEReadingModel(case, fe, friction=friction))
     readings = process(ve.data, case)
-    out = {j: diagnose(AnalyticalChainModel(case, "detailed", j), readings).as_json() for j in ("rigid", "released")}
-    return ContactDiagnosis(ve.csv_text, ve.truth, out["rigid"], out["released"])
+    if jobs >= 2:
+        with cf.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(pool_start_method())) as ex:
+            released = ex.submit(_diagnosed, case, "released", readings)
+            rigid = _diagnosed(case, "rigid", readings)
+            released = released.result()
+    else:
+        rigid, released = (_diagnosed(case, j, readings) for j in ("rigid", "released"))
+    return ContactDiagnosis(ve.csv_text, ve.truth, rigid, released)

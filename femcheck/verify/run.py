@@ -296,7 +296,7 @@ def run_verify(case, out_dir, points=None, check: bool = False, baseline_path=No
         if has_contact_joints(fe) and len(fe.points) == 9:
             from femcheck.verify.contact_diagnosis import diagnose_contact_fe
             tc = time.perf_counter()
-            contact_diag = diagnose_contact_fe(case, fe, friction)
+            contact_diag = diagnose_contact_fe(case, fe, friction, jobs=jobs)
             put("contact_fe_experiment.csv", contact_diag.csv_text)
             put("contact_fe_truth.json", json.dumps(contact_diag.truth, indent=2) + "\n")
             put("contact_fe_diagnosis.json", json.dumps({"rigid": contact_diag.rigid, "released": contact_diag.released},
