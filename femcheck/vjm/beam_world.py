@@ -42,6 +42,7 @@ import scipy.linalg as sla
 
 from femcheck.fe.beam import BeamSection, assemble_beam_stiffness, line_mesh
 from femcheck.vjm.dh import DHChain, as_poses, forward_kinematics
+from femcheck.vjm.mitre_corner import MIN_MITRE_ANGLE_RAD, corner_compliance
 from femcheck.vjm.strain_wave_torsion import StrainWaveTorsion
 
 log = logging.getLogger(__name__)
@@ -124,7 +125,11 @@ class BeamWorld:
     ``chain`` (standard DH); ``bearings`` (n,); ``links`` (n + 1,): the base and bodies 1..n; ``tool`` the
     flange-to-TCP tube; ``rigid_links``: the tubes are rigid (only the joints deform); ``max_element_m``:
     the longest beam element (the element is nodally exact for end loads, so this only matters for the
-    self-weight); ``shear``: Timoshenko (True) or Euler-Bernoulli; ``gravity_m_per_s2`` base frame.
+    self-weight); ``shear``: Timoshenko (True) or Euler-Bernoulli; ``gravity_m_per_s2`` base frame;
+    ``mitre_corners``: where a body's tube turns (the same tube on both sides, by more than 3 degrees), its
+    two ends at the corner are joined by this factor times the single mitre's rotational compliance
+    (:func:`femcheck.vjm.mitre_corner.corner_compliance`): 0 a rigid corner (beam theory), 1 the mitre of
+    ASME B31.3; ignored with ``rigid_links``.
     """
 
     chain: DHChain
@@ -135,18 +140,21 @@ class BeamWorld:
     max_element_m: float = 0.05
     shear: bool = True
     gravity_m_per_s2: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    mitre_corners: float = 0.0
 
     def __post_init__(self):
         n = self.chain.n_joints
         if self.chain.convention != "standard":
             raise ValueError(f"BeamWorld needs a standard DH chain; got {self.chain.convention!r}")
+        if not (self.mitre_corners >= 0 and math.isfinite(self.mitre_corners)):
+            raise ValueError(f"BeamWorld.mitre_corners = {self.mitre_corners}; expected a finite factor >= 0")
         if len(self.bearings) != n or len(self.links) != n + 1:
             raise ValueError(f"BeamWorld: {len(self.bearings)} bearings and {len(self.links)} links; "
                              f"expected {n} and {n + 1} (base + one per joint)")
 
     def with_rigid_structure(self) -> "BeamWorld":
         """The same arm with rigid links and bearings: only the drives' torsion is left (the conventional VJM)."""
-        return dataclasses.replace(self, rigid_links=True, bearings=tuple(
+        return dataclasses.replace(self, rigid_links=True, mitre_corners=0.0, bearings=tuple(
             Bearing(torsion_Nm_per_rad=b.torsion_Nm_per_rad, offset_m=b.offset_m, mass_kg=b.mass_kg,
                     torsion_curve=b.torsion_curve)
             for b in self.bearings))
@@ -155,13 +163,15 @@ class BeamWorld:
 @dataclass(frozen=True)
 class _Layout:
     """One configuration's mesh: nodes (N, 3) m; segments [(elements (e, 2), tube)]; body_nodes per body;
-    joint_frames (n, 3, 3); tcp node index."""
+    joint_frames (n, 3, 3); tcp node index; corners {node: (corner node, (3, 3) compliance rad/(N m))}: a node
+    that starts a tube after a mitred corner, coincident with the node that ends the tube before it."""
 
     nodes: np.ndarray
     segments: list
     body_nodes: list
     joint_frames: np.ndarray
     tcp: int
+    corners: dict = dataclasses.field(default_factory=dict)
 
 
 def _layout(world: BeamWorld, fk, i: int) -> _Layout:
@@ -179,14 +189,22 @@ def _layout(world: BeamWorld, fk, i: int) -> _Layout:
         if j + 1 == n:
             segs.append((origin[n], fk.tcp[i], world.tool))
         paths.append(segs)
-    nodes, segments, body_nodes = [], [], []
+    nodes, segments, body_nodes, corners = [], [], [], {}
     for segs in paths:
         ids = [len(nodes)]
         nodes.append(np.asarray(segs[0][0], dtype=float))
+        prev = None                                   # (direction, tube) of the body's last tube
         for a, b, tube in segs:
             L = float(np.linalg.norm(b - a))
             if L < 1e-12:
                 continue
+            t = (b - a) / L
+            if (world.mitre_corners > 0 and not world.rigid_links and prev is not None and prev[1] == tube
+                    and math.acos(min(1.0, float(prev[0] @ t))) > MIN_MITRE_ANGLE_RAD):
+                corners[len(nodes)] = (ids[-1], world.mitre_corners * corner_compliance(tube, prev[0], t))
+                nodes.append(nodes[ids[-1]])          # the next tube starts at a coincident node
+                ids.append(len(nodes) - 1)
+            prev = (t, tube)
             ne = max(1, math.ceil(L / world.max_element_m - 1e-9))
             pts, _ = line_mesh(a, b, ne)
             new = list(range(len(nodes), len(nodes) + ne))
@@ -195,7 +213,7 @@ def _layout(world: BeamWorld, fk, i: int) -> _Layout:
             ids.extend(new)
         body_nodes.append(ids)
     return _Layout(nodes=np.array(nodes), segments=segments, body_nodes=body_nodes,
-                   joint_frames=jf[:, :3, :3], tcp=body_nodes[-1][-1])
+                   joint_frames=jf[:, :3, :3], tcp=body_nodes[-1][-1], corners=corners)
 
 
 def _skew(r):
@@ -228,7 +246,16 @@ def _reduction(world: BeamWorld, lay: _Layout):
         # body 0's first node is the clamped base (T = 0)
         ref = ids[0]
         for node in ids[1:]:
-            if world.rigid_links:                     # u = u_ref + theta_ref x (x - x_ref), theta = theta_ref
+            if node in lay.corners:                   # u = u_corner + relative rotations along C's eigenvectors
+                corner, C = lay.corners[node]
+                lam, vec = np.linalg.eigh(C)
+                T[node] = T[corner]
+                for l, v in zip(lam, vec.T):
+                    if l > 1e-12 * lam.max():         # a zero eigenvalue is a rigid direction
+                        T[node, 3:, col] += v
+                        spring[col] = 1.0 / l
+                        col += 1
+            elif world.rigid_links:                     # u = u_ref + theta_ref x (x - x_ref), theta = theta_ref
                 G = np.eye(6)
                 G[:3, 3:] = -_skew(lay.nodes[node] - lay.nodes[ref])
                 T[node] = G @ T[ref]

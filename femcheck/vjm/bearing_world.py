@@ -173,10 +173,10 @@ COBOT7_FLANGE_M = (0.15, 0.070, 0.21, 0.060, 0.21, 0.050, 0.081)
 
 def cobot7_bearings_world(case, bearing_stiffness: str = "catalogue", **overrides) -> BeamWorld:
     """The bearings world of ``cases/cobot7.toml`` (module docstring): the beam world's tubes, tool and drive
-    masses with catalogue drives and output bearings at their real places. ``bearing_stiffness``: the
-    catalogue's K_B (the world) or ``"line_contact"`` (the estimate it replaces, a variant). ``overrides``
-    replace :class:`BeamWorld` fields."""
-    base = cobot7_world(case)
+    masses with catalogue drives and output bearings at their real places, and mitred corners. ``bearing_stiffness``:
+    the catalogue's K_B (the world) or ``"line_contact"`` (the estimate it replaces, a variant). ``overrides``
+    replace :class:`BeamWorld` fields (``mitre_corners=0.0``: rigid beam corners)."""
+    base = cobot7_world(case, mitre_corners=1.0)
     bearings = tuple(CHA_MODULES[s].bearing(flange - CHA_MODULES[s].flange_offset_m, b.mass_kg, bearing_stiffness)
                      for s, flange, b in zip(COBOT7_SIZES, COBOT7_FLANGE_M, base.bearings))
     world = dataclasses.replace(base, bearings=bearings)
@@ -189,14 +189,16 @@ def with_nominal_drives(world: BeamWorld) -> BeamWorld:
     return dataclasses.replace(world, bearings=tuple(dataclasses.replace(b, torsion_curve=None) for b in world.bearings))
 
 
-def with_softer_structure(world: BeamWorld, bearings: float = 1.0, links: float = 1.0) -> BeamWorld:
-    """The same world with every bearing's radial, axial and tilt stiffness divided by ``bearings`` and every
-    link tube's Young's modulus (so its shear modulus too) divided by ``links`` (each > 0); drives and tool
+def with_softer_structure(world: BeamWorld, bearings: float = 1.0, links: float = 1.0, corners: float = 1.0) -> BeamWorld:
+    """The same world with every bearing's radial, axial and tilt stiffness divided by ``bearings``, every
+    link tube's Young's modulus (so its shear modulus, and the mitred corners' compliance, too) divided by
+    ``links``, and the mitred corners' compliance multiplied by ``corners`` (each factor > 0); drives and tool
     unchanged. A bracket of the world's idealizations, not a setting: the result at a factor says how soft the
     structure must be for a verdict to change."""
-    if not (bearings > 0 and links > 0 and math.isfinite(bearings) and math.isfinite(links)):
-        raise ValueError(f"with_softer_structure(bearings={bearings}, links={links}); expected finite factors > 0")
+    if not all(f > 0 and math.isfinite(f) for f in (bearings, links, corners)):
+        raise ValueError(f"with_softer_structure(bearings={bearings}, links={links}, corners={corners}); "
+                         "expected finite factors > 0")
     soft = tuple(dataclasses.replace(b, radial_N_per_m=b.radial_N_per_m / bearings, axial_N_per_m=b.axial_N_per_m / bearings,
                                      tilt_Nm_per_rad=b.tilt_Nm_per_rad / bearings) for b in world.bearings)
     tubes = tuple(dataclasses.replace(t, E_Pa=t.E_Pa / links) for t in world.links)
-    return dataclasses.replace(world, bearings=soft, links=tubes)
+    return dataclasses.replace(world, bearings=soft, links=tubes, mitre_corners=world.mitre_corners * corners)
