@@ -31,8 +31,8 @@ GEOMETRY_NOTE = ("geometry: KUKA LBR iiwa 7 R800 (seed 002 does not publish the 
 WORLD_ROLE = {"beam": "check of the assembly: joints are the extended model's own springs at its tilt places, "
                       "bearing scale set to seed 002's torsion share, so the extended model fits it by construction",
               "bearings": "catalogue drives and output bearings (radial + axial springs at their real places, the "
-                          "catalogue's tilting moment stiffness), links and housings as beams; nothing set from "
-                          "seed 002's results or the VJM case"}
+                          "catalogue's tilting moment stiffness), links and housings as beams whose corners are mitred tube joints "
+                          "(ASME B31.3 single-mitre flexibility); nothing set from seed 002's results or the VJM case"}
 
 
 class WorldOptionError(FemcheckError, ValueError):

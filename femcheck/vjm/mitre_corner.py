@@ -68,7 +68,12 @@ def mitre_flexibility(outer_diameter_m: float, wall_m: float, angle_rad: float) 
     r2 = (outer_diameter_m - wall_m) / 2
     cot = 1.0 / math.tan(angle_rad / 2)
     h = wall_m * (1 + cot) / (2 * r2)
-    return MitreFlexibility(h=h, k=max(1.0, 1.52 / h ** (5.0 / 6.0)), R1_m=r2 * (1 + cot) / 2, angle_rad=angle_rad)
+    return MitreFlexibility(h=h, k=mitre_flexibility_factor(h), R1_m=r2 * (1 + cot) / 2, angle_rad=angle_rad)
+
+
+def mitre_flexibility_factor(h: float) -> float:
+    """B31.3 Table D300's mitre flexibility factor k = 1.52 / h^(5/6), not less than unity (the table's note)."""
+    return max(1.0, 1.52 / h ** (5.0 / 6.0))
 
 
 def bend_bending_integral(t_in, t_out) -> tuple[np.ndarray, float]:
