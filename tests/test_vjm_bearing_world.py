@@ -256,7 +256,7 @@ def test_nominal_drives_meet_the_floor_only_with_the_mitred_corners(case):
     assert all(b.torsion_curve is None for b in w.bearings)
     r, c, e = _ratio_and_errors(case, w)
     assert c == pytest.approx(16.84, abs=0.05) and e == pytest.approx(3.66, abs=0.05)
-    r, c, e = _ratio_and_errors(case, with_nominal_drives(cobot7_bearings_world(case, mitre_corners=0.0)))
+    r, c, e = _ratio_and_errors(case, with_nominal_drives(cobot7_bearings_world(case, corners="rigid")))
     assert e < 0.5 and c == pytest.approx(10.78, abs=0.05)
 
 

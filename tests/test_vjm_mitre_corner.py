@@ -90,7 +90,7 @@ def test_world_adds_each_corner_compliance_in_series_under_a_pure_moment(case):
     1-6; series compliances, linear drives; 1e-9 of the difference: the solves' round-off). Checks the
     corners' assembly (eigen-directions, springs, base frame) independently of the solver."""
     w = with_nominal_drives(cobot7_bearings_world(case))
-    rigid = dataclasses.replace(w, mitre_corners=0.0)
+    rigid = dataclasses.replace(w, corners="rigid")
     q = np.radians(np.array(case.identification.configurations_deg[:3], dtype=float))
     M = np.array([[0.0, 0.0, 0.0, 7.0, -4.0, 5.0]])
     d = tcp_deflections(w, q, M).twist[:, 0, 3:] - tcp_deflections(rigid, q, M).twist[:, 0, 3:]

@@ -43,6 +43,7 @@ import scipy.linalg as sla
 from femcheck.fe.beam import BeamSection, assemble_beam_stiffness, line_mesh
 from femcheck.vjm.dh import DHChain, as_poses, forward_kinematics
 from femcheck.vjm.mitre_corner import MIN_MITRE_ANGLE_RAD, corner_compliance
+from femcheck.vjm.mitre_superelement import corner_excess_compliance
 from femcheck.vjm.strain_wave_torsion import StrainWaveTorsion
 
 log = logging.getLogger(__name__)
@@ -126,10 +127,12 @@ class BeamWorld:
     flange-to-TCP tube; ``rigid_links``: the tubes are rigid (only the joints deform); ``max_element_m``:
     the longest beam element (the element is nodally exact for end loads, so this only matters for the
     self-weight); ``shear``: Timoshenko (True) or Euler-Bernoulli; ``gravity_m_per_s2`` base frame;
-    ``mitre_corners``: where a body's tube turns (the same tube on both sides, by more than 3 degrees), its
-    two ends at the corner are joined by this factor times the single mitre's rotational compliance
-    (:func:`femcheck.vjm.mitre_corner.corner_compliance`): 0 a rigid corner (beam theory), 1 the mitre of
-    ASME B31.3; ignored with ``rigid_links``.
+    ``corners``: how a body's tube turns a corner (the same tube on both sides, by more than 3 degrees):
+    ``"rigid"`` (beam theory: the two tube ends share one node), ``"solid"`` (the two ends are joined by the
+    6 x 6 compliance of the mitred tube's solid FE superelement beyond the beam's,
+    :func:`femcheck.vjm.mitre_superelement.corner_excess_compliance`) or ``"b31.3"`` (by ASME B31.3's
+    single-mitre flexibility as a rotational compliance, :func:`femcheck.vjm.mitre_corner.corner_compliance`);
+    ``corner_scale`` multiplies that compliance (a bracket, 1 as computed); both ignored with ``rigid_links``.
     """
 
     chain: DHChain
@@ -140,30 +143,56 @@ class BeamWorld:
     max_element_m: float = 0.05
     shear: bool = True
     gravity_m_per_s2: tuple[float, float, float] = (0.0, 0.0, -9.81)
-    mitre_corners: float = 0.0
+    corners: str = "rigid"
+    corner_scale: float = 1.0
 
     def __post_init__(self):
         n = self.chain.n_joints
         if self.chain.convention != "standard":
             raise ValueError(f"BeamWorld needs a standard DH chain; got {self.chain.convention!r}")
-        if not (self.mitre_corners >= 0 and math.isfinite(self.mitre_corners)):
-            raise ValueError(f"BeamWorld.mitre_corners = {self.mitre_corners}; expected a finite factor >= 0")
+        if self.corners not in CORNER_MODELS:
+            raise ValueError(f"BeamWorld.corners = {self.corners!r}; expected one of {', '.join(CORNER_MODELS)}")
+        if not (self.corner_scale > 0 and math.isfinite(self.corner_scale)):
+            raise ValueError(f"BeamWorld.corner_scale = {self.corner_scale}; expected a finite factor > 0")
         if len(self.bearings) != n or len(self.links) != n + 1:
             raise ValueError(f"BeamWorld: {len(self.bearings)} bearings and {len(self.links)} links; "
                              f"expected {n} and {n + 1} (base + one per joint)")
 
     def with_rigid_structure(self) -> "BeamWorld":
         """The same arm with rigid links and bearings: only the drives' torsion is left (the conventional VJM)."""
-        return dataclasses.replace(self, rigid_links=True, mitre_corners=0.0, bearings=tuple(
+        return dataclasses.replace(self, rigid_links=True, corners="rigid", bearings=tuple(
             Bearing(torsion_Nm_per_rad=b.torsion_Nm_per_rad, offset_m=b.offset_m, mass_kg=b.mass_kg,
                     torsion_curve=b.torsion_curve)
             for b in self.bearings))
 
 
+#: how a body's tube turns a corner (:class:`BeamWorld`)
+CORNER_MODELS = ("rigid", "solid", "b31.3")
+
+
+def corner_hinge_compliance(model: str, tube: Tube, t_in, t_out) -> np.ndarray:
+    """(6, 6) compliance, base frame, [u; theta] per [F; M] at the corner, that joins the tube ends meeting where
+    ``tube``'s axis turns from unit ``t_in`` to unit ``t_out``: the solid superelement's excess over the beam
+    (``"solid"``, computed in the frame t_in = x, bend in x-y, and turned into the corner's frame) or B31.3's
+    rotational compliance (``"b31.3"``, translations rigid)."""
+    t_in, t_out = np.asarray(t_in, dtype=float), np.asarray(t_out, dtype=float)
+    C = np.zeros((6, 6))
+    if model == "b31.3":
+        C[3:, 3:] = corner_compliance(tube, t_in, t_out)
+        return C
+    angle = math.acos(min(1.0, float(t_in @ t_out)))
+    e2 = t_out - (t_in @ t_out) * t_in
+    e2 /= np.linalg.norm(e2)
+    R = np.c_[t_in, e2, np.cross(t_in, e2)]          # superelement frame -> base frame
+    C[:3, :3], C[3:, 3:] = R, R
+    return C @ corner_excess_compliance(tube, round(angle, 9)) @ C.T
+
+
 @dataclass(frozen=True)
 class _Layout:
     """One configuration's mesh: nodes (N, 3) m; segments [(elements (e, 2), tube)]; body_nodes per body;
-    joint_frames (n, 3, 3); tcp node index; corners {node: (corner node, (3, 3) compliance rad/(N m))}: a node
+    joint_frames (n, 3, 3); tcp node index; corners {node: (corner node, (6, 6) compliance, base frame,
+    [u; theta] per [F; M])}: a node
     that starts a tube after a mitred corner, coincident with the node that ends the tube before it."""
 
     nodes: np.ndarray
@@ -199,9 +228,9 @@ def _layout(world: BeamWorld, fk, i: int) -> _Layout:
             if L < 1e-12:
                 continue
             t = (b - a) / L
-            if (world.mitre_corners > 0 and not world.rigid_links and prev is not None and prev[1] == tube
+            if (world.corners != "rigid" and not world.rigid_links and prev is not None and prev[1] == tube
                     and math.acos(min(1.0, float(prev[0] @ t))) > MIN_MITRE_ANGLE_RAD):
-                corners[len(nodes)] = (ids[-1], world.mitre_corners * corner_compliance(tube, prev[0], t))
+                corners[len(nodes)] = (ids[-1], world.corner_scale * corner_hinge_compliance(world.corners, tube, prev[0], t))
                 nodes.append(nodes[ids[-1]])          # the next tube starts at a coincident node
                 ids.append(len(nodes) - 1)
             prev = (t, tube)
@@ -246,13 +275,13 @@ def _reduction(world: BeamWorld, lay: _Layout):
         # body 0's first node is the clamped base (T = 0)
         ref = ids[0]
         for node in ids[1:]:
-            if node in lay.corners:                   # u = u_corner + relative rotations along C's eigenvectors
+            if node in lay.corners:                   # u = u_corner + relative motions along C's eigenvectors
                 corner, C = lay.corners[node]
                 lam, vec = np.linalg.eigh(C)
                 T[node] = T[corner]
                 for l, v in zip(lam, vec.T):
                     if l > 1e-12 * lam.max():         # a zero eigenvalue is a rigid direction
-                        T[node, 3:, col] += v
+                        T[node, :, col] += v
                         spring[col] = 1.0 / l
                         col += 1
             elif world.rigid_links:                     # u = u_ref + theta_ref x (x - x_ref), theta = theta_ref

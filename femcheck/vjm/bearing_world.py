@@ -175,8 +175,8 @@ def cobot7_bearings_world(case, bearing_stiffness: str = "catalogue", **override
     """The bearings world of ``cases/cobot7.toml`` (module docstring): the beam world's tubes, tool and drive
     masses with catalogue drives and output bearings at their real places, and mitred corners. ``bearing_stiffness``:
     the catalogue's K_B (the world) or ``"line_contact"`` (the estimate it replaces, a variant). ``overrides``
-    replace :class:`BeamWorld` fields (``mitre_corners=0.0``: rigid beam corners)."""
-    base = cobot7_world(case, mitre_corners=1.0)
+    replace :class:`BeamWorld` fields (``corners="rigid"``: beam theory's corners, ``"b31.3"``: the code factor)."""
+    base = cobot7_world(case, corners="solid")
     bearings = tuple(CHA_MODULES[s].bearing(flange - CHA_MODULES[s].flange_offset_m, b.mass_kg, bearing_stiffness)
                      for s, flange, b in zip(COBOT7_SIZES, COBOT7_FLANGE_M, base.bearings))
     world = dataclasses.replace(base, bearings=bearings)
@@ -201,4 +201,4 @@ def with_softer_structure(world: BeamWorld, bearings: float = 1.0, links: float 
     soft = tuple(dataclasses.replace(b, radial_N_per_m=b.radial_N_per_m / bearings, axial_N_per_m=b.axial_N_per_m / bearings,
                                      tilt_Nm_per_rad=b.tilt_Nm_per_rad / bearings) for b in world.bearings)
     tubes = tuple(dataclasses.replace(t, E_Pa=t.E_Pa / links) for t in world.links)
-    return dataclasses.replace(world, bearings=soft, links=tubes, mitre_corners=world.mitre_corners * corners)
+    return dataclasses.replace(world, bearings=soft, links=tubes, corner_scale=world.corner_scale * corners)
