@@ -150,28 +150,42 @@ def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and
     assert np.abs(res.twist - linear).max() > 0.1 * np.abs(linear).max()   # K1..K3, not K3 alone
 
 
+# The tests below measure on the default bearings world, whose mitred corners come from the solid FE superelement:
+# its cold build (three tube sizes, about 25 s CPU) makes them slow; the cached superelements make later runs fast.
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "not met: with the catalogue's output-bearing tilting moment stiffness (K_B 290, 114, 45 N m/arcmin for "
+    "sizes 32, 25, 17), the catalogue's piecewise drive law (K1, K2, K3 over 0-T1-T2) at each pose's self-weight "
+    "torque and the mitred corners of the solid FE superelement, the extended model's error is 8.30 % mean against "
+    "the conventional 14.16 % over the 26 Table I tests (ratio 0.586; verification 14.41 % against 22.32 %). The "
+    "corners' compliance (the joint section bends and ovalises about the axis in the mitre plane) is held by "
+    "neither model, and more of it does not help (x0.5: 0.581, x2: 0.626); the drives' secant law (0.54-0.92 K3) "
+    "holds the ratio up as before. Nothing was tuned; the cited data and the solid give this. The halving needs "
+    "output bearings about 1.7 times softer than K_B (test_halving_needs_bearings_softer_than_the_catalogue_s); the "
+    "seed's linear reading, constant K3 drives, meets both sides (6.68 % against 15.38 %, "
+    "test_nominal_drives_...)."))
 def test_extended_model_halves_the_conventional_error_on_the_bearings_world(study):
     """Two-sided target, upper side: extended <= 0.5 x conventional (mean over the 26 Table I tests, and over
-    the verification tests 9-13). Measured noise-free: 6.87 % against 14.81 % (ratio 0.464), verification 9.80
-    against 22.16 % (0.442). Met with a thin margin that rests on the mitred corners: with rigid corners
-    (beam theory) the ratio is 0.667, and it crosses 0.5 when the corners have 0.725 of B31.3's compliance
-    (test_halving_needs_the_mitred_corners_...)."""
+    the verification tests 9-13)."""
     conv, ext = (study.summary(study.fits[k]) for k in ("conventional", "extended"))
     assert ext["table1_all"]["mean"] <= 0.5 * conv["table1_all"]["mean"]
     assert ext["verification"]["mean"] <= 0.5 * conv["verification"]["mean"]
 
 
+@pytest.mark.slow
 def test_the_bearings_world_is_not_the_extended_model(study):
     """Two-sided target, lower side: extended >= 0.5 % mean over the 26 tests (the world is not the model).
-    Measured noise-free 6.87 %: the drives follow the catalogue's piecewise law and the mitred corners'
+    Measured noise-free 8.30 %: the drives follow the catalogue's piecewise law and the mitred corners'
     compliance is no spring the model has."""
     assert study.summary(study.fits["extended"])["table1_all"]["mean"] >= 0.5
 
 
+@pytest.mark.slow
 def test_torsion_share_is_reported_not_fitted(case, study):
     """The world's torsion share is the rigid-structure deflection projected on the full one; nothing sets it.
-    Measured 64.9 % mean (77.4 % with rigid corners; seed 002: 76.5 %, which nothing here was set to). The check recomputes it from the two
-    worlds (1e-12)."""
+    Measured 63.8 % mean (77.4 % with rigid corners; seed 002: 76.5 %, which nothing here was set to). The check
+    recomputes it from the two worlds (1e-12)."""
     w = cobot7_bearings_world(case)
     q = np.radians(np.array(case.identification.configurations_deg[:2], dtype=float))
     W = np.array(case.identification.wrenches)
@@ -182,26 +196,41 @@ def test_torsion_share_is_reported_not_fitted(case, study):
     assert 0.5 < study.world_torsion_share[:13, 0].mean() < 1.0
 
 
-def test_identify_world_bearings_json(capsys):
-    """`femcheck identify cases/cobot7.toml --world bearings --json -`: per model the errors (mean and max) and
-    the torsion share, and the world's own share; the role line says what the world is."""
-    assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
-    res = json.loads(capsys.readouterr().out)
-    assert res["world"] == "bearings" and "catalogue" in res["role"]
+def _check_json_keys(res):
+    assert res["world"] == "bearings" and "catalogue" in res["role"] and "mitre" in res["role"]
     assert res["world_drive_torsion"][0] == {"limit_torques_Nm": [29.0, 108.0], "stiffness_Nm_per_rad": [67e3, 110e3, 120e3]}
     for k in ("conventional", "extended"):
         m = res["models"][k]
         for key in ("error_identification_pct", "error_verification_pct"):
             assert set(m[key]) == {"mean", "max"} and m[key]["max"] >= m[key]["mean"] > 0
         assert 0 < m["torsion_share"]["mean"] <= 100
-    assert res["world_torsion_share"]["mean"] == pytest.approx(64.9, abs=0.05)   # as printed, 1 decimal
     # the output bearings' tilt is the catalogue's K_B (size 32: 290 N m/arcmin), exactly as stated
     assert res["world_stiffness_Nm_per_rad"]["tilt"][0] == pytest.approx(290.0 / ARCMIN, rel=1e-12)
-    # the two-sided target as the JSON states it: ratio 0.464 as printed (3 decimals), both sides met
+    assert set(res["target"]) == {"extended_over_conventional", "extended_le_half_conventional", "extended_ge_0_5_pct"}
+
+
+def test_identify_world_bearings_json_keys(capsys, monkeypatch):
+    """`femcheck identify cases/cobot7.toml --world bearings --json -`: per model the errors (mean and max) and
+    the torsion share, the world's own share, the target; the role line says what the world is. Run here on the
+    same world with the code's (B31.3) corners, which need no superelement build: the keys and the role are the
+    same; the default world's figures are checked in the slow test below."""
+    from femcheck.cli import _identify_world
+    monkeypatch.setattr(_identify_world, "make_world", lambda case, world: cobot7_bearings_world(case, corners="b31.3"))
+    assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
+    _check_json_keys(json.loads(capsys.readouterr().out))
+
+
+@pytest.mark.slow
+def test_identify_world_bearings_json(capsys):
+    """The default world's JSON: world torsion share 63.8 % and ratio 0.586 as printed (1 and 3 decimals);
+    halving not met, floor met."""
+    assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    _check_json_keys(res)
+    assert res["world_torsion_share"]["mean"] == pytest.approx(63.8, abs=0.05)
     t = res["target"]
-    assert t["extended_over_conventional"] == pytest.approx(0.464, abs=5e-4)
-    assert t["extended_le_half_conventional"] is True and t["extended_ge_0_5_pct"] is True
-    assert "mitre" in res["role"]
+    assert t["extended_over_conventional"] == pytest.approx(0.586, abs=5e-4)
+    assert t["extended_le_half_conventional"] is False and t["extended_ge_0_5_pct"] is True
 
 
 def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
@@ -210,6 +239,7 @@ def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
     assert "check of the assembly" in text and "bearings" in text
 
 
+@pytest.mark.slow
 def test_bearings_world_data_through_the_csv_path_gives_the_same_fit(tmp_path, capsys, study):
     """--make-data --world bearings writes the world's measurements as DATA.csv; `identify` on it gives the
     compliances of the --world run (the same least squares on the same numbers, 1e-9)."""
@@ -239,40 +269,52 @@ def test_softer_structure_divides_the_bearing_springs_and_the_link_moduli_only(c
             b0.torsion_Nm_per_rad, b0.torsion_curve, b0.offset_m, b0.mass_kg)
     assert [t.E_Pa for t in s.links] == [t.E_Pa / 2.0 for t in w.links] and s.tool == w.tool
     assert s.links[0].G_Pa == pytest.approx(w.links[0].G_Pa / 2.0, rel=1e-15)
-    assert w.mitre_corners == 1.0 and s.mitre_corners == 1.0      # E / 2 already halves the corners' stiffness
-    assert with_softer_structure(w, corners=0.5).mitre_corners == 0.5
+    assert w.corners == "solid" and w.corner_scale == 1.0 and s.corner_scale == 1.0   # E / 2 softens the corners too
+    assert with_softer_structure(w, corners=0.5).corner_scale == 0.5
     with pytest.raises(ValueError, match="with_softer_structure"):
         with_softer_structure(w, bearings=0.0)
     with pytest.raises(ValueError, match="corners=-1"):
         with_softer_structure(w, corners=-1.0)
 
 
+@pytest.mark.slow
 def test_nominal_drives_meet_the_floor_only_with_the_mitred_corners(case):
     """The seed's FE reading (drives and bearings at "nominal value", sec. IV-A: a linear model): constant K3
     drives. With rigid corners the joints' compliance is what the extended model is built of, and it fits the
-    world to 0.26 % (conventional 10.78 %): the floor fails. The mitred corners' compliance is no joint spring:
-    16.84 % against 3.66 %. Each as measured +- 0.05 % (2 decimals)."""
+    world to 0.26 % (conventional 10.78 %): the floor fails. The solid mitred corners' compliance is no joint
+    spring: 15.38 % against 6.68 % (ratio 0.434, both sides met). Each as measured +- 0.05 % (2 decimals)."""
     w = with_nominal_drives(cobot7_bearings_world(case))
     assert all(b.torsion_curve is None for b in w.bearings)
     r, c, e = _ratio_and_errors(case, w)
-    assert c == pytest.approx(16.84, abs=0.05) and e == pytest.approx(3.66, abs=0.05)
+    assert c == pytest.approx(15.38, abs=0.05) and e == pytest.approx(6.68, abs=0.05)
     r, c, e = _ratio_and_errors(case, with_nominal_drives(cobot7_bearings_world(case, corners="rigid")))
     assert e < 0.5 and c == pytest.approx(10.78, abs=0.05)
 
 
+@pytest.mark.slow
 def test_catalogue_bearings_move_the_ratio_from_the_line_contact_estimate_s(case):
-    """The bearing value matters: the line-contact estimate (rigid rings, 18-23 times stiffer) gives 12.53 %
-    against 7.75 % (ratio 0.619), the catalogue's K_B 14.81 % against 6.87 % (0.464). Each ratio as measured,
+    """The bearing value matters: the line-contact estimate (rigid rings, 18-23 times stiffer) gives 12.78 %
+    against 9.42 % (ratio 0.737), the catalogue's K_B 14.16 % against 8.30 % (0.586). Each ratio as measured,
     +-0.005 (3 decimals); they fail if the two worlds are the same bearings."""
     r_line = _ratio_and_errors(case, cobot7_bearings_world(case, "line_contact"))[0]
     r_cat = _ratio_and_errors(case, cobot7_bearings_world(case))[0]
-    assert r_line == pytest.approx(0.619, abs=5e-3) and r_cat == pytest.approx(0.464, abs=5e-3)
+    assert r_line == pytest.approx(0.737, abs=5e-3) and r_cat == pytest.approx(0.586, abs=5e-3)
 
 
-def test_halving_needs_the_mitred_corners_at_least_three_quarters_of_b31_3(case):
-    """How far the halving depends on the corners' compliance (B31.3's single-mitre factor, unflanged; the
-    drive flange near each corner would stiffen it): the ratio crosses 0.5 between half (0.540) and all
-    (0.464) of it (bisection: at 0.725). The bracket fails if the crossing moves out of it (either side)."""
+@pytest.mark.slow
+def test_halving_needs_bearings_softer_than_the_catalogue_s(case):
+    """How far the halving's failure depends on the catalogue's K_B (an average value): the ratio crosses 0.5
+    only with bearings between 1.5 and 2 times softer (0.523, 0.471). The bracket fails if the crossing moves
+    out of it (either side)."""
     w = cobot7_bearings_world(case)
-    lo, hi = (_ratio_and_errors(case, with_softer_structure(w, corners=f))[0] for f in (0.5, 1.0))
+    lo, hi = (_ratio_and_errors(case, with_softer_structure(w, bearings=f))[0] for f in (1.5, 2.0))
     assert lo > 0.5 > hi
+
+
+@pytest.mark.slow
+def test_scaling_the_solid_corners_does_not_reach_the_halving(case):
+    """The corners' compliance is no lever for the verdict: at half and at twice the solid's the ratio is
+    0.581 and 0.626, both above 0.5 (as measured +- 0.005), and more corner compliance makes it worse."""
+    w = cobot7_bearings_world(case)
+    half, double = (_ratio_and_errors(case, with_softer_structure(w, corners=f))[0] for f in (0.5, 2.0))
+    assert half == pytest.approx(0.581, abs=5e-3) and double == pytest.approx(0.626, abs=5e-3)
