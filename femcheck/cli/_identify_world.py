@@ -32,7 +32,7 @@ WORLD_ROLE = {"beam": "check of the assembly: joints are the extended model's ow
                       "bearing scale set to seed 002's torsion share, so the extended model fits it by construction",
               "bearings": "catalogue drives and output bearings (radial + axial springs at their real places, the "
                           "catalogue's tilting moment stiffness), links and housings as beams whose corners are mitred tube joints "
-                          "(ASME B31.3 single-mitre flexibility); nothing set from seed 002's results or the VJM case"}
+                          "(a solid FE superelement of the mitre); nothing set from seed 002's results or the VJM case"}
 
 
 class WorldOptionError(FemcheckError, ValueError):

@@ -13,6 +13,8 @@ Structure (per configuration, built from the forward kinematics; standard DH onl
   foot of the common normal (``o_j + d_j z_j``), along the normal to the next joint-frame origin, then along
   joint axis j+1 to bearing j+1. The base runs from the frame-0 origin, which is clamped, to bearing 1. The
   last body ends at the flange, and a tool tube (``tool``) runs from the flange to the tool point (TCP).
+  Where a body's tube turns, the corner is rigid (beam theory) or, with ``corners``, a mitred tube joint: the
+  two tube ends there are coincident nodes joined by the corner's 6 x 6 compliance (:class:`BeamWorld`).
 * **Joints.** Joint j is a pair of coincident nodes at the bearing point ``o_j + offset_j z_j`` (the last
   node of body j-1 and the first of body j). They are coupled by six springs in the joint frame
   (:class:`Bearing`): torsion about the axis (the drive), two tilts, two radial translations and the axial one
