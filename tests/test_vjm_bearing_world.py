@@ -151,9 +151,8 @@ def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and
 
 
 # The tests below measure on the default bearings world, whose mitred corners come from the solid FE superelement:
-# its cold build (three tube sizes, about 25 s CPU) makes them slow; the cached superelements make later runs fast.
+# built cold in about 4 s CPU (three tube sizes, 28 224 DOFs each), then read from the FE cache.
 
-@pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason=(
     "not met: with the catalogue's output-bearing tilting moment stiffness (K_B 290, 114, 45 N m/arcmin for "
     "sizes 32, 25, 17), the catalogue's piecewise drive law (K1, K2, K3 over 0-T1-T2) at each pose's self-weight "
@@ -173,7 +172,6 @@ def test_extended_model_halves_the_conventional_error_on_the_bearings_world(stud
     assert ext["verification"]["mean"] <= 0.5 * conv["verification"]["mean"]
 
 
-@pytest.mark.slow
 def test_the_bearings_world_is_not_the_extended_model(study):
     """Two-sided target, lower side: extended >= 0.5 % mean over the 26 tests (the world is not the model).
     Measured noise-free 8.30 %: the drives follow the catalogue's piecewise law and the mitred corners'
@@ -181,7 +179,6 @@ def test_the_bearings_world_is_not_the_extended_model(study):
     assert study.summary(study.fits["extended"])["table1_all"]["mean"] >= 0.5
 
 
-@pytest.mark.slow
 def test_torsion_share_is_reported_not_fitted(case, study):
     """The world's torsion share is the rigid-structure deflection projected on the full one; nothing sets it.
     Measured 63.8 % mean (77.4 % with rigid corners; seed 002: 76.5 %, which nothing here was set to). The check
@@ -209,21 +206,10 @@ def _check_json_keys(res):
     assert set(res["target"]) == {"extended_over_conventional", "extended_le_half_conventional", "extended_ge_0_5_pct"}
 
 
-def test_identify_world_bearings_json_keys(capsys, monkeypatch):
-    """`femcheck identify cases/cobot7.toml --world bearings --json -`: per model the errors (mean and max) and
-    the torsion share, the world's own share, the target; the role line says what the world is. Run here on the
-    same world with the code's (B31.3) corners, which need no superelement build: the keys and the role are the
-    same; the default world's figures are checked in the slow test below."""
-    from femcheck.cli import _identify_world
-    monkeypatch.setattr(_identify_world, "make_world", lambda case, world: cobot7_bearings_world(case, corners="b31.3"))
-    assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
-    _check_json_keys(json.loads(capsys.readouterr().out))
-
-
-@pytest.mark.slow
 def test_identify_world_bearings_json(capsys):
-    """The default world's JSON: world torsion share 63.8 % and ratio 0.586 as printed (1 and 3 decimals);
-    halving not met, floor met."""
+    """`femcheck identify cases/cobot7.toml --world bearings --json -`: per model the errors (mean and max) and
+    the torsion share, the world's own share, the target; the role line says what the world is. World torsion
+    share 63.8 % and ratio 0.586 as printed (1 and 3 decimals); halving not met, floor met."""
     assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
     res = json.loads(capsys.readouterr().out)
     _check_json_keys(res)
@@ -239,7 +225,6 @@ def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
     assert "check of the assembly" in text and "bearings" in text
 
 
-@pytest.mark.slow
 def test_bearings_world_data_through_the_csv_path_gives_the_same_fit(tmp_path, capsys, study):
     """--make-data --world bearings writes the world's measurements as DATA.csv; `identify` on it gives the
     compliances of the --world run (the same least squares on the same numbers, 1e-9)."""
@@ -277,7 +262,6 @@ def test_softer_structure_divides_the_bearing_springs_and_the_link_moduli_only(c
         with_softer_structure(w, corners=-1.0)
 
 
-@pytest.mark.slow
 def test_nominal_drives_meet_the_floor_only_with_the_mitred_corners(case):
     """The seed's FE reading (drives and bearings at "nominal value", sec. IV-A: a linear model): constant K3
     drives. With rigid corners the joints' compliance is what the extended model is built of, and it fits the
@@ -291,7 +275,6 @@ def test_nominal_drives_meet_the_floor_only_with_the_mitred_corners(case):
     assert e < 0.5 and c == pytest.approx(10.78, abs=0.05)
 
 
-@pytest.mark.slow
 def test_catalogue_bearings_move_the_ratio_from_the_line_contact_estimate_s(case):
     """The bearing value matters: the line-contact estimate (rigid rings, 18-23 times stiffer) gives 12.78 %
     against 9.42 % (ratio 0.737), the catalogue's K_B 14.16 % against 8.30 % (0.586). Each ratio as measured,
@@ -301,7 +284,6 @@ def test_catalogue_bearings_move_the_ratio_from_the_line_contact_estimate_s(case
     assert r_line == pytest.approx(0.737, abs=5e-3) and r_cat == pytest.approx(0.586, abs=5e-3)
 
 
-@pytest.mark.slow
 def test_halving_needs_bearings_softer_than_the_catalogue_s(case):
     """How far the halving's failure depends on the catalogue's K_B (an average value): the ratio crosses 0.5
     only with bearings between 1.5 and 2 times softer (0.523, 0.471). The bracket fails if the crossing moves
@@ -311,7 +293,6 @@ def test_halving_needs_bearings_softer_than_the_catalogue_s(case):
     assert lo > 0.5 > hi
 
 
-@pytest.mark.slow
 def test_scaling_the_solid_corners_does_not_reach_the_halving(case):
     """The corners' compliance is no lever for the verdict: at half and at twice the solid's the ratio is
     0.581 and 0.626, both above 0.5 (as measured +- 0.005), and more corner compliance makes it worse."""

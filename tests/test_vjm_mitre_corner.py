@@ -84,13 +84,13 @@ def case():
     return femcheck.load_case(ROOT / "cases" / "cobot7.toml")
 
 
-@pytest.mark.parametrize("corners", ["b31.3", pytest.param("solid", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("corners", ["b31.3", "solid"])
 def test_world_adds_each_corner_compliance_in_series_under_a_pure_moment(case, corners):
     """A pure moment M at the TCP loads every section of the clamped serial arm by the same M, so the TCP
     twist of the mitred world minus the rigid-corner world is, over the six corners (bodies 1-6; series
     compliances, linear drives), rotation sum_i D_i,tt M and translation sum_i (D_i,ut M + D_i,tt M x (x_tcp -
     x_i)) (1e-9 of the difference: the solves' round-off). Checks the corners' assembly (eigen-directions,
-    springs, base frame, place) independently of the solver. ``solid`` builds the superelements (slow)."""
+    springs, base frame, place) independently of the solver."""
     w = with_nominal_drives(cobot7_bearings_world(case, corners=corners))
     rigid = dataclasses.replace(w, corners="rigid")
     q = np.radians(np.array(case.identification.configurations_deg[:3], dtype=float))

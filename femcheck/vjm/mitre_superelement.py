@@ -124,13 +124,13 @@ def mitre_superelement(tube, angle_rad: float, leg_m: float | None = None, n_cir
 
 
 def _build(tube, angle_rad, leg, n_circ, n_leg, n_wall) -> MitreSuperelement:
-    from skfem import Basis, ElementHex2, ElementVector, asm
-    from skfem.models.elasticity import lame_parameters, linear_elasticity
+    from skfem import Basis, ElementHex2, ElementVector
+    from femcheck.fe.elasticity import assemble_stiffness
     from femcheck.fe.schur_complement import schur_complement
 
     mesh, t_in, t_out = _mesh(tube.outer_diameter_m, tube.wall_m, angle_rad, leg, n_circ, n_leg, n_wall)
-    basis = Basis(mesh, ElementVector(ElementHex2()), intorder=4)
-    K = asm(linear_elasticity(*lame_parameters(tube.E_Pa, tube.nu)), basis).tocsr()
+    basis = Basis(mesh, ElementVector(ElementHex2()), intorder=4)     # 3 x 3 x 3 Gauss points
+    K = assemble_stiffness(basis, tube.E_Pa, tube.nu)                 # vectorized isotropic elasticity
     n = K.shape[0]
     comp = np.empty(n, dtype=int)
     for arr in (basis.nodal_dofs, basis.edge_dofs, basis.facet_dofs, basis.interior_dofs):
