@@ -111,7 +111,7 @@ def _gravity_torques(world, q):
 
 @pytest.fixture(scope="module")
 def rigid_run(case):
-    w = cobot7_bearings_world(case).with_rigid_structure()
+    w = cobot7_bearings_world(case, drives="catalogue").with_rigid_structure()
     q = np.radians(np.array(case.identification.configurations_deg[:4], dtype=float))
     W = np.array(case.identification.wrenches)
     return w, q, W, tcp_deflections(w, q, W)
@@ -150,38 +150,44 @@ def test_rigid_structure_leaves_the_drives_on_the_secant_between_self_weight_and
     assert np.abs(res.twist - linear).max() > 0.1 * np.abs(linear).max()   # K1..K3, not K3 alone
 
 
-# The tests below measure on the default bearings world, whose mitred corners come from the solid FE superelement:
-# built cold in about 4 s CPU (three tube sizes, 28 224 DOFs each), then read from the FE cache.
+# The tests below measure on the bearings world, whose mitred corners come from the solid FE superelement:
+# built cold in about 4 s CPU (three tube sizes, 28 224 DOFs each), then read from the FE cache. The default
+# drives are seed 002's reading (constant K3); the catalogue law is the variant ``drives="catalogue"``.
 
-@pytest.mark.xfail(strict=True, reason=(
-    "not met: with the catalogue's output-bearing tilting moment stiffness (K_B 290, 114, 45 N m/arcmin for "
-    "sizes 32, 25, 17), the catalogue's piecewise drive law (K1, K2, K3 over 0-T1-T2) at each pose's self-weight "
-    "torque and the mitred corners of the solid FE superelement, the extended model's error is 8.30 % mean against "
-    "the conventional 14.16 % over the 26 Table I tests (ratio 0.586; verification 14.41 % against 22.32 %). The "
-    "corners' compliance (the joint section bends and ovalises about the axis in the mitre plane) is held by "
-    "neither model, and more of it does not help (x0.5: 0.581, x2: 0.626); the drives' secant law (0.54-0.92 K3) "
-    "holds the ratio up as before. Nothing was tuned; the cited data and the solid give this. The halving needs "
-    "output bearings about 1.7 times softer than K_B (test_halving_needs_bearings_softer_than_the_catalogue_s); the "
-    "seed's linear reading, constant K3 drives, meets both sides (6.68 % against 15.38 %, "
-    "test_nominal_drives_...)."))
 def test_extended_model_halves_the_conventional_error_on_the_bearings_world(study):
-    """Two-sided target, upper side: extended <= 0.5 x conventional (mean over the 26 Table I tests, and over
-    the verification tests 9-13)."""
+    """Two-sided target, upper side: extended <= 0.5 x conventional, mean over the 26 Table I tests (measured
+    6.68 % against 15.38 %, 0.434) and over the verification tests 9-13 (12.41 against 25.16 %, 0.493: the
+    margin there is small, the check fails with corners 1.3 times as compliant)."""
     conv, ext = (study.summary(study.fits[k]) for k in ("conventional", "extended"))
     assert ext["table1_all"]["mean"] <= 0.5 * conv["table1_all"]["mean"]
     assert ext["verification"]["mean"] <= 0.5 * conv["verification"]["mean"]
+    assert ext["table1_all"]["mean"] == pytest.approx(6.68, abs=0.05)      # as measured, 2 decimals
+    assert conv["table1_all"]["mean"] == pytest.approx(15.38, abs=0.05)
 
 
 def test_the_bearings_world_is_not_the_extended_model(study):
     """Two-sided target, lower side: extended >= 0.5 % mean over the 26 tests (the world is not the model).
-    Measured noise-free 8.30 %: the drives follow the catalogue's piecewise law and the mitred corners'
-    compliance is no spring the model has."""
+    Measured noise-free 6.68 %: the mitred corners' compliance is no spring the model has (with rigid corners
+    the same world gives 0.26 %: test_nominal_drives_meet_the_floor_only_with_the_mitred_corners)."""
     assert study.summary(study.fits["extended"])["table1_all"]["mean"] >= 0.5
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not met with the catalogue's piecewise drive law (drives='catalogue': K1, K2, K3 over 0-T1-T2 at each pose's "
+    "self-weight torque): the extended model's error is 8.30 % mean against the conventional 14.16 % over the "
+    "26 Table I tests (ratio 0.586). Each drive then works on the secant of its curve between the self-weight "
+    "torque and the loaded one (0.54-0.92 K3), different in every pose, which no constant spring of either VJM "
+    "holds; that error is common to both models and keeps the ratio above 0.5. Seed 002's FE sets the drives to "
+    "their nominal value (the default world, which meets the target); the halving with the law needs bearings "
+    "about 1.7 times softer than the catalogue's K_B (test_halving_with_the_catalogue_law_needs_softer_bearings)."))
+def test_extended_model_halves_the_conventional_error_with_the_catalogue_drive_law(case):
+    r, c, e = _ratio_and_errors(case, cobot7_bearings_world(case, drives="catalogue"))
+    assert e <= 0.5 * c
 
 
 def test_torsion_share_is_reported_not_fitted(case, study):
     """The world's torsion share is the rigid-structure deflection projected on the full one; nothing sets it.
-    Measured 63.8 % mean (77.4 % with rigid corners; seed 002: 76.5 %, which nothing here was set to). The check
+    Measured 55.0 % mean (70.3 % with rigid corners; seed 002: 76.5 %, which nothing here was set to). The check
     recomputes it from the two worlds (1e-12)."""
     w = cobot7_bearings_world(case)
     q = np.radians(np.array(case.identification.configurations_deg[:2], dtype=float))
@@ -193,9 +199,12 @@ def test_torsion_share_is_reported_not_fitted(case, study):
     assert 0.5 < study.world_torsion_share[:13, 0].mean() < 1.0
 
 
-def _check_json_keys(res):
+def _check_json_keys(res, drives="nominal"):
     assert res["world"] == "bearings" and "catalogue" in res["role"] and "mitre" in res["role"]
-    assert res["world_drive_torsion"][0] == {"limit_torques_Nm": [29.0, 108.0], "stiffness_Nm_per_rad": [67e3, 110e3, 120e3]}
+    assert res["drives"] == drives and res["drives_role"]
+    assert res["world_drive_torsion"][0] == (None if drives == "nominal" else
+                                             {"limit_torques_Nm": [29.0, 108.0], "stiffness_Nm_per_rad": [67e3, 110e3, 120e3]})
+    assert res["world_stiffness_Nm_per_rad"]["torsion"][0] == 120e3        # catalogue K3 of size 32
     for k in ("conventional", "extended"):
         m = res["models"][k]
         for key in ("error_identification_pct", "error_verification_pct"):
@@ -208,15 +217,31 @@ def _check_json_keys(res):
 
 def test_identify_world_bearings_json(capsys):
     """`femcheck identify cases/cobot7.toml --world bearings --json -`: per model the errors (mean and max) and
-    the torsion share, the world's own share, the target; the role line says what the world is. World torsion
-    share 63.8 % and ratio 0.586 as printed (1 and 3 decimals); halving not met, floor met."""
+    the torsion share, the world's own share, the target; the role lines say what the world and its drives
+    are. World torsion share 55.0 % and ratio 0.434 as printed (1 and 3 decimals); both sides met."""
     assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--json", "-"]) == 0
     res = json.loads(capsys.readouterr().out)
     _check_json_keys(res)
+    assert res["world_torsion_share"]["mean"] == pytest.approx(55.0, abs=0.05)
+    t = res["target"]
+    assert t["extended_over_conventional"] == pytest.approx(0.434, abs=5e-4)
+    assert t["extended_le_half_conventional"] is True and t["extended_ge_0_5_pct"] is True
+
+
+def test_identify_world_bearings_catalogue_drives_json(capsys):
+    """`--drives catalogue`: the same keys, the piecewise law in the JSON, ratio 0.586 (halving not met, floor
+    met); `--drives` with the beam world or an unknown reading is refused with exit 2 and one line."""
+    assert main(["identify", "cases/cobot7.toml", "--world", "bearings", "--drives", "catalogue", "--json", "-"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    _check_json_keys(res, "catalogue")
     assert res["world_torsion_share"]["mean"] == pytest.approx(63.8, abs=0.05)
     t = res["target"]
     assert t["extended_over_conventional"] == pytest.approx(0.586, abs=5e-4)
     assert t["extended_le_half_conventional"] is False and t["extended_ge_0_5_pct"] is True
+    for args in (["--world", "beam", "--drives", "catalogue"], ["--world", "bearings", "--drives", "linear"]):
+        assert main(["identify", "cases/cobot7.toml", *args]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--drives" in err[0]
 
 
 def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
@@ -267,11 +292,12 @@ def test_nominal_drives_meet_the_floor_only_with_the_mitred_corners(case):
     drives. With rigid corners the joints' compliance is what the extended model is built of, and it fits the
     world to 0.26 % (conventional 10.78 %): the floor fails. The solid mitred corners' compliance is no joint
     spring: 15.38 % against 6.68 % (ratio 0.434, both sides met). Each as measured +- 0.05 % (2 decimals)."""
-    w = with_nominal_drives(cobot7_bearings_world(case))
-    assert all(b.torsion_curve is None for b in w.bearings)
+    w = cobot7_bearings_world(case)
+    assert all(b.torsion_curve is None for b in w.bearings)             # the default is the nominal reading
+    assert w == with_nominal_drives(cobot7_bearings_world(case, drives="catalogue"))   # the law alone differs
     r, c, e = _ratio_and_errors(case, w)
     assert c == pytest.approx(15.38, abs=0.05) and e == pytest.approx(6.68, abs=0.05)
-    r, c, e = _ratio_and_errors(case, with_nominal_drives(cobot7_bearings_world(case, corners="rigid")))
+    r, c, e = _ratio_and_errors(case, cobot7_bearings_world(case, corners="rigid"))
     assert e < 0.5 and c == pytest.approx(10.78, abs=0.05)
 
 
@@ -279,23 +305,33 @@ def test_catalogue_bearings_move_the_ratio_from_the_line_contact_estimate_s(case
     """The bearing value matters: the line-contact estimate (rigid rings, 18-23 times stiffer) gives 12.78 %
     against 9.42 % (ratio 0.737), the catalogue's K_B 14.16 % against 8.30 % (0.586). Each ratio as measured,
     +-0.005 (3 decimals); they fail if the two worlds are the same bearings."""
-    r_line = _ratio_and_errors(case, cobot7_bearings_world(case, "line_contact"))[0]
-    r_cat = _ratio_and_errors(case, cobot7_bearings_world(case))[0]
+    r_line = _ratio_and_errors(case, cobot7_bearings_world(case, "line_contact", drives="catalogue"))[0]
+    r_cat = _ratio_and_errors(case, cobot7_bearings_world(case, drives="catalogue"))[0]
     assert r_line == pytest.approx(0.737, abs=5e-3) and r_cat == pytest.approx(0.586, abs=5e-3)
 
 
-def test_halving_needs_bearings_softer_than_the_catalogue_s(case):
-    """How far the halving's failure depends on the catalogue's K_B (an average value): the ratio crosses 0.5
-    only with bearings between 1.5 and 2 times softer (0.523, 0.471). The bracket fails if the crossing moves
-    out of it (either side)."""
-    w = cobot7_bearings_world(case)
+def test_halving_with_the_catalogue_law_needs_softer_bearings(case):
+    """With the catalogue drive law, how far the halving's failure depends on the catalogue's K_B (an average
+    value): the ratio crosses 0.5 only with bearings between 1.5 and 2 times softer (0.523, 0.471). The bracket
+    fails if the crossing moves out of it (either side)."""
+    w = cobot7_bearings_world(case, drives="catalogue")
     lo, hi = (_ratio_and_errors(case, with_softer_structure(w, bearings=f))[0] for f in (1.5, 2.0))
     assert lo > 0.5 > hi
 
 
-def test_scaling_the_solid_corners_does_not_reach_the_halving(case):
-    """The corners' compliance is no lever for the verdict: at half and at twice the solid's the ratio is
-    0.581 and 0.626, both above 0.5 (as measured +- 0.005), and more corner compliance makes it worse."""
-    w = cobot7_bearings_world(case)
+def test_with_the_catalogue_law_the_corners_do_not_reach_the_halving(case):
+    """With the catalogue drive law the corners' compliance is no lever for the verdict: at half and at twice
+    the solid's the ratio is 0.581 and 0.626, both above 0.5 (as measured +- 0.005)."""
+    w = cobot7_bearings_world(case, drives="catalogue")
     half, double = (_ratio_and_errors(case, with_softer_structure(w, corners=f))[0] for f in (0.5, 2.0))
     assert half == pytest.approx(0.581, abs=5e-3) and double == pytest.approx(0.626, abs=5e-3)
+
+
+def test_the_default_verdict_holds_within_a_factor_of_two_of_the_corners_but_not_beyond(case):
+    """The margin of the default world's verdict (nominal drives), stated rather than hidden: the corners'
+    compliance x 0.5 gives 0.294, x 2 gives 0.559 (the halving then fails); bearings 2 x softer 0.328, 2 x
+    stiffer 0.514. As measured +- 0.005 (3 decimals); the check fails if the world's sensitivity changes."""
+    w = cobot7_bearings_world(case)
+    got = [_ratio_and_errors(case, with_softer_structure(w, **kw))[0]
+           for kw in ({"corners": 0.5}, {"corners": 2.0}, {"bearings": 2.0}, {"bearings": 0.5})]
+    np.testing.assert_allclose(got, [0.294, 0.559, 0.328, 0.514], rtol=0, atol=5e-3)

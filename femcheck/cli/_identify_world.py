@@ -58,21 +58,33 @@ def _target(summ) -> dict:
             "extended_ge_0_5_pct": bool(e >= 0.5)}
 
 
-def make_world(case, world: str):
-    """The world named by ``--world`` for a 7-joint case (ValueError for another arm)."""
+#: ``--drives`` of the bearings world: how each drive's torsion enters (printed and written to the JSON)
+DRIVES = {"nominal": "each drive a constant spring of its catalogue stiffness K3, as seed 002's linear FE sets "
+                     "transmissions and bearings to their nominal values (sec. IV-A)",
+          "catalogue": "each drive the catalogue's piecewise torsion law, loaded by the arm's own weight: a wrench sees "
+                       "the secant between the self-weight torque and the loaded one"}
+
+
+def make_world(case, world: str, drives: str = "nominal"):
+    """The world named by ``--world`` for a 7-joint case (ValueError for another arm); ``drives`` (bearings
+    world only, :data:`DRIVES`): ``nominal`` constant catalogue springs, ``catalogue`` the piecewise law."""
     if world == "bearings":
         from femcheck.vjm.bearing_world import cobot7_bearings_world
-        return cobot7_bearings_world(case)
+        return cobot7_bearings_world(case, drives=drives)
     from femcheck.vjm.beam_world import cobot7_world
     return cobot7_world(case)
 
 
 def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: float, seed: int, gravity: bool,
-                   random_poses: int) -> None:
+                   random_poses: int, drives: str = "nominal") -> None:
     from femcheck.vjm.world_identification import identify_on_world
 
     if world not in WORLD_ROLE:
         raise WorldOptionError(f"--world {world!r}; expected 'beam' or 'bearings'")
+    if drives not in DRIVES:
+        raise WorldOptionError(f"--drives {drives!r}; expected one of {', '.join(DRIVES)}")
+    if drives != "nominal" and world != "bearings":
+        raise WorldOptionError(f"--drives {drives}: only with --world bearings (the beam world's drives are its own springs)")
     if not np.isfinite(noise_mm) or noise_mm < 0:
         raise WorldOptionError(f"--noise-mm {noise_mm:g}; expected a finite sigma >= 0 (mm)")
     if random_poses < 0:
@@ -80,7 +92,7 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
     if case.identification is None:
         raise WorldOptionError(f"{case_path}: [identification] is required for --world (the configurations and wrenches)")
     try:
-        w = make_world(case, world)
+        w = make_world(case, world, drives)
     except ValueError as e:
         raise WorldOptionError(f"{case_path}: {e}") from None
     from femcheck.cli import progress
@@ -93,7 +105,9 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
     lab1 = [s for s in st.label if not s.startswith("r")]
     summ = {k: st.summary(f) for k, f in st.fits.items()}
     out = {
-        "world": world, "role": WORLD_ROLE[world], "case": case_path, "note": GEOMETRY_NOTE, "noise_mm": noise_mm, "seed": seed,
+        "world": world, "role": WORLD_ROLE[world],
+        "drives": drives if world == "bearings" else None, "drives_role": DRIVES[drives] if world == "bearings" else None,
+        "case": case_path, "note": GEOMETRY_NOTE, "noise_mm": noise_mm, "seed": seed,
         "gravity": gravity, "wrenches": st.wrenches.tolist(),
         "configurations": [
             {"label": st.label[i], "set": "identification" if st.is_identification[i] else "verification",
@@ -133,7 +147,10 @@ def identify_world(case, case_path: str, *, world: str, json_out, noise_mm: floa
         return
     p = len(st.wrenches)
     nid, nver = int(st.is_identification.sum()), int((table1 & ~st.is_identification).sum())
-    lines = [f"{case_path} on the {world} world ({GEOMETRY_NOTE})", f"this world: {WORLD_ROLE[world]}",
+    lines = [f"{case_path} on the {world} world ({GEOMETRY_NOTE})", f"this world: {WORLD_ROLE[world]}"]
+    if world == "bearings":
+        lines.append(f"drives ({drives}): {DRIVES[drives]}")
+    lines += [
              f"measurements: {nid} identification + {nver} verification configurations"
              + (f" + {random_poses} random poses" if random_poses else "")
              + f" x {p} wrenches; noise {noise_mm:g} mm; self-weight {'on' if gravity else 'off'}"

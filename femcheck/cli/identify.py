@@ -101,6 +101,7 @@ def register(app: typer.Typer) -> None:
         true_weights: str = typer.Option("table2-df", "--true-weights", help="HISS --make-data: W1..W11 as 11 numbers, or table2-df | table2-fd (seed 001 Table 2)"),
         seed: int = typer.Option(0, "--seed", help="HISS: seed of --make-data and of the fit's restarts; --world: seed of the noise and the random poses"),
         world: str = typer.Option(None, "--world", help="serial robot, no DATA.csv: measure on a beam-FE world of the arm and compare both models with seed 002. 'bearings' = catalogue drives and output bearings at their real places (the test of the extended model); 'beam' = joints made of the extended model's own springs, a check of the assembly by construction"),
+        drives: str = typer.Option("nominal", "--drives", help="--world bearings: 'nominal' = each drive a constant spring of its catalogue stiffness (seed 002's linear FE, sec. IV-A); 'catalogue' = the catalogue's piecewise torsion law, loaded by the arm's weight"),
         gravity: bool = typer.Option(False, "--gravity", help="--world: the measurements include the self-weight deflection"),
         random_poses: int = typer.Option(0, "--random-poses", help="--world: extra verification poses, uniform within the iiwa 7's joint limits"),
         restarts: int = typer.Option(None, "--restarts", help="HISS: starts of the weight fit (default: the case's [fitting] restarts)"),
@@ -124,7 +125,7 @@ def register(app: typer.Typer) -> None:
                 raise IdentifyDataError(f"{data_path}: --world makes its own measurements; give DATA.csv only with --make-data")
             from femcheck.cli._identify_world import identify_world
             identify_world(case, case_path, world=world, json_out=json_out, noise_mm=0.0 if noise_mm is None else noise_mm,
-                           seed=seed, gravity=gravity, random_poses=random_poses)
+                           seed=seed, gravity=gravity, random_poses=random_poses, drives=drives)
             return
         if data_path is None:
             raise IdentifyDataError("DATA.csv is required (or --world bearings|beam on a serial_robot case)")
@@ -141,10 +142,12 @@ def register(app: typer.Typer) -> None:
                 raise IdentifyDataError(f"{data_path}: exists; --make-data never overwrites a file")
             w = None
             if world is not None:
-                from femcheck.cli._identify_world import WORLD_ROLE, make_world
+                from femcheck.cli._identify_world import DRIVES, WORLD_ROLE, make_world
                 if world not in WORLD_ROLE:
                     raise IdentifyDataError(f"--world {world!r}; expected 'beam' or 'bearings'")
-                w = make_world(case, world)
+                if drives not in DRIVES:
+                    raise IdentifyDataError(f"--drives {drives!r}; expected one of {', '.join(DRIVES)}")
+                w = make_world(case, world, drives)
             nmm = 0.0 if noise_mm is None else noise_mm
             if not np.isfinite(nmm) or nmm < 0:
                 raise IdentifyDataError(f"--noise-mm {nmm:g}; expected a finite sigma >= 0 (mm)")

@@ -93,7 +93,8 @@ def _mesh(D: float, T: float, angle_rad: float, leg_m: float, n_circ: int, n_leg
     new = -np.ones(p.shape[1], dtype=int)
     new[keep] = np.arange(keep.sum())
     t = new[remap[m.t]]
-    return MeshHex(xyz[:, keep], t), t_in, t_out
+    # contiguous arrays: skfem otherwise copies them itself and logs a warning for every mesh
+    return MeshHex(np.ascontiguousarray(xyz[:, keep]), np.ascontiguousarray(t)), t_in, t_out
 
 
 def _rigid_ring_rows(x: np.ndarray, comp: np.ndarray, xc: np.ndarray) -> np.ndarray:
