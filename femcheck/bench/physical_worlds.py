@@ -64,7 +64,9 @@ import time
 import numpy as np
 
 AREA = "physical_worlds"
+#: detectable worlds a run draws until (every draw kept), and the most draws it makes per detectable world asked
 WORLDS = 30
+MAX_DRAWS_FACTOR = 4
 SEED = 2026
 CASE_PATH = "cases/haptic_6psu.toml"
 DETAIL_PATH = "reports/bench/detail/physical_worlds_worlds.json"
@@ -176,11 +178,17 @@ def score(changes: list, causes: list, alias_groups: list = ()) -> dict:
     legs_right = any(len(els) == 1 and els[0] == first_change["element"]
                      and sorted(legs or (range(6) if n == "actuation_compliance" else [])) == first_change["legs"]
                      for n, els, legs in named)
+    # honest: no named cause claims an unchanged element (each is a changed element alone, or the diagnosis declares
+    # it inseparable from a changed element alone); naming nothing is honest
+    claims_right = [(len(els) == 1 and els[0] in truth)
+                    or any(len(g) == 1 and g[0] in truth for g in _group_of(c, alias_groups))
+                    for c, (_, els, _) in zip(real, named)]
     return {"named": [n for n, _, _ in named], "first_element": "+".join(first),
             "first_group": "\u2261".join("+".join(els) for els in first_group) or "+".join(first),
             "right_element_first_strict": bool(right_first), "right_element_first": bool(right_first_alias),
             "both_named_strict": bool(set(truth) <= own), "both_named": bool(set(truth) <= own_alias),
-            "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right)}
+            "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right),
+            "honest": bool(all(claims_right))}
 
 
 _ANCHORS: dict = {}
@@ -258,81 +266,145 @@ def confusion_table(rows: list, column: str = "first_element") -> str:
     return "\n".join(" | ".join(x[k].ljust(width[k]) for k in range(len(head))) for x in [head] + body)
 
 
-#: the definitions of the flat rates, written into the figures
+#: the definitions of the flat figures, written into the figures
 DEFINITIONS = {
-    "right_element_first_rate_strict": "share of worlds whose first named cause is a changed element alone",
-    "right_element_first_rate": "as _strict, or the first named cause heads an alias group that the diagnosis "
-                                "declares inseparable (readings within chi2 9) with a changed element alone among "
-                                "its members",
-    "both_changes_named_rate_strict": "share of two-change worlds where each changed element is named by a cause of "
-                                      "its own element",
-    "both_changes_named_rate": "as _strict, a member of a named cause's alias group also counting as named",
-    "wrong_whole_leg_rate": "share of worlds where leg_softening (a uniform whole-leg factor) is named",
     "detectable": f"every changed element alone moves the noise-free device-FE readings (total - preload) by an RMS "
-                  f">= {DETECTABLE_SNR:g} x the reading scatter {SCATTER_M * 1e6:g} um; *_detectable rates are over "
-                  f"those worlds only"}
+                  f">= {DETECTABLE_SNR:g} x the reading scatter {SCATTER_M * 1e6:g} um; a change below that is within "
+                  f"the scatter of each reading and no method can be asked to name it",
+    "draws": "seeded random worlds are drawn (seeds S, S+1, ...) until the detectable ones reach the number asked "
+             "for; every draw is kept and reported",
+    "right_element_first_rate": "over the detectable worlds: the first named cause is a changed element alone, or "
+                                "heads an alias group that the diagnosis declares inseparable (readings within chi2 "
+                                "9) with a changed element alone among its members",
+    "right_element_first_rate_strict": "over the detectable worlds: the first named cause is a changed element alone",
+    "both_changes_named_rate": "over the detectable two-change worlds: each changed element is named by a cause of "
+                               "its own element or by a member of a named cause's alias group",
+    "both_changes_named_rate_strict": "over the detectable two-change worlds: each changed element is named by a "
+                                      "cause of its own element",
+    "wrong_whole_leg_rate": "over the detectable worlds: leg_softening (a uniform whole-leg factor) is named",
+    "_all_draws": "the same rate over every scored draw, detectable or not (a world whose own FE failed has no "
+                  "readings and is not scored)",
+    "honesty_rate_undetectable": "over the undetectable draws: the diagnosis names no cause of an unchanged element "
+                                 "(it names none, or every named cause is a changed element alone or declares a "
+                                 "changed element alone in its alias group)",
+}
 
 
 def _rates(rows: list, suffix: str) -> dict:
     pairs = [r for r in rows if len(r["changes"]) == 2]
-    rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
-    count = lambda rs, k: int(sum(r[k] for r in rs))
     out = {}
     for key, src, rs in (("right_element_first", "right_element_first", rows),
                          ("right_element_first", "right_element_first_strict", rows),
                          ("both_changes_named", "both_named", pairs), ("both_changes_named", "both_named_strict", pairs),
                          ("wrong_whole_leg", "wrong_whole_leg", rows)):
         tail = "_strict" if src.endswith("_strict") else ""
-        out[f"{key}_rate{tail}{suffix}"] = rate(rs, src)
-        out[f"{key}_count{tail}{suffix}"] = count(rs, src)
+        out[f"{key}_rate{tail}{suffix}"] = _rate(rs, src)
+        out[f"{key}_count{tail}{suffix}"] = int(sum(r[src] for r in rs))
     out[f"worlds{suffix}"], out[f"pairs{suffix}"] = len(rows), len(pairs)
+    out[f"singles{suffix}"] = len(rows) - len(pairs)
+    out[f"legs_right_rate{suffix}"] = _rate(rows, "legs_right")
+    out[f"explained_rate{suffix}"] = _rate([{"x": r["verdict"] == "explained"} for r in rows], "x")
+    out[f"first_alias_group_size_mean{suffix}"] = (
+        round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3) if rows else None)
     return out
 
 
-def summarize(rows: list) -> dict:
-    """The flat figures over the worlds whose FE answered (``worlds_failed_seeds`` those whose did not: not scored)."""
-    failed = [r["seed"] for r in rows if "world_failed" in r]
-    rows = [r for r in rows if "world_failed" not in r]
-    singles = [r for r in rows if len(r["changes"]) == 1]
-    pairs = [r for r in rows if len(r["changes"]) == 2]
-    seen = [r for r in rows if r["detectable"]]
-    rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
+def _rate(rows: list, key: str):
+    return round(float(np.mean([r[key] for r in rows])), 4) if rows else None
+
+
+def _confusions(rows: list, suffix: str) -> dict:
+    """The single changes (changed element > first named group) and the pairs (changed elements > the elements
+    named, each cause's, in order) as counted text."""
     confusion, named_pairs = {}, {}
-    for r in singles:
-        key = f"{r['changes'][0]['element']}>{r['first_group']}"
-        confusion[key] = confusion.get(key, 0) + 1
-    for r in pairs:   # changed elements -> the elements named (each cause's, in order)
-        got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
-        key = f"{'+'.join(sorted(c['element'] for c in r['changes']))}>{got}"
-        named_pairs[key] = named_pairs.get(key, 0) + 1
-    median = lambda k: round(float(np.median([r[k] for r in rows])), 2) if rows else None
-    snr = {el: [c["snr"] for r in rows for c in r["changes"] if c["element"] == el] for el in sorted(ELEMENT.values())}
-    return {"worlds_drawn": len(rows) + len(failed), "worlds_failed_seeds": ", ".join(map(str, failed)) or "none",
-            "singles": len(singles), **_rates(rows, ""), **_rates(seen, "_detectable"),
-            "legs_right_rate": rate(rows, "legs_right"),
-            "first_alias_group_size_mean": round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3)
-            if rows else None,
-            "explained_rate": rate([{"x": r["verdict"] == "explained"} for r in rows], "x"),
+    for r in rows:
+        if len(r["changes"]) == 1:
+            key = f"{r['changes'][0]['element']}>{r['first_group']}"
+            confusion[key] = confusion.get(key, 0) + 1
+        else:
+            got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
+            key = f"{'+'.join(sorted(c['element'] for c in r['changes']))}>{got}"
+            named_pairs[key] = named_pairs.get(key, 0) + 1
+    return {f"confusion_singles_changed_to_first_named{suffix}":
+            ", ".join(f"{k} {v}" for k, v in sorted(confusion.items())) or "none",
+            f"pairs_changed_to_named{suffix}": ", ".join(f"{k} {v}" for k, v in sorted(named_pairs.items())) or "none"}
+
+
+def summarize(rows: list) -> dict:
+    """The flat figures of the draws (module doc, :data:`DEFINITIONS`): the headline rates over the detectable
+    worlds, the same over every scored draw (``*_all_draws``), the honesty of the undetectable draws; a draw whose
+    own FE failed (``worlds_failed_seeds``) has no readings and is not scored."""
+    failed = [r["seed"] for r in rows if "world_failed" in r]
+    scored = [r for r in rows if "world_failed" not in r]
+    seen = [r for r in scored if r["detectable"]]
+    unseen = [r for r in scored if not r["detectable"]]
+    median = lambda k: round(float(np.median([r[k] for r in scored])), 2) if scored else None
+    snr = {el: [c["snr"] for r in scored for c in r["changes"] if c["element"] == el] for el in sorted(ELEMENT.values())}
+    return {"worlds_drawn": len(rows), "worlds_detectable": len(seen), "worlds_undetectable": len(unseen),
+            "worlds_failed": len(failed), "worlds_failed_seeds": ", ".join(map(str, failed)) or "none",
+            "seeds_drawn": f"{rows[0]['seed']}-{rows[-1]['seed']}" if rows else "none",
+            **_rates(seen, ""), **_rates(scored, "_all_draws"),
+            "honesty_rate_undetectable": _rate(unseen, "honest"),
+            "honesty_count_undetectable": int(sum(r["honest"] for r in unseen)),
+            **_confusions(seen, ""), **_confusions(scored, "_all_draws"),
+            "undetectable_changed_to_named": ", ".join(
+                f"{r['seed']} {_short(r['changes'])}>{'+'.join(r['named']) or 'none'}" for r in unseen) or "none",
             "snr_median_by_element": ", ".join(f"{el} {np.median(v):.2f}" for el, v in snr.items() if v),
             "cpu_per_world_s_median": median("cpu_s"), "world_fe_cpu_s_median": median("world_cpu_s"),
             "world": "device FE of the modified case (solid parts, actuation FE, frictional contact joints with "
                      "contact-FE laws), leg by leg",
             "model": "chain of the unmodified case + its idealization gap to the device FE of the unmodified case",
             "definitions": "; ".join(f"{k}: {v}" for k, v in DEFINITIONS.items()),
-            "confusion_singles_changed_to_first_named": ", ".join(f"{k} {v}" for k, v in sorted(confusion.items())),
-            "pairs_changed_to_named": ", ".join(f"{k} {v}" for k, v in sorted(named_pairs.items())),
             "rows": rows}
 
 
-def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
-        detail: str = DETAIL_PATH) -> dict:
-    """The flat figures of ``n_worlds`` worlds from ``seed``; each world's row is printed as it comes and the rows
-    so far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
-    from concurrent.futures import ProcessPoolExecutor
+def enough(rows: list, n_detectable: int) -> bool:
+    """Whether ``rows`` (in seed order) hold ``n_detectable`` detectable worlds."""
+    return sum(1 for r in rows if r.get("detectable")) >= n_detectable
+
+
+def draw_until(one, seed: int, n_detectable: int, max_draws: int, jobs: int = 1, keep=None) -> list:
+    """Rows of the worlds ``seed``, ``seed + 1``, ... up to the first prefix holding ``n_detectable`` detectable
+    worlds (or ``max_draws`` draws); ``one(seed)`` gives a world's row, ``keep(row)`` sees each row in seed order.
+    With ``jobs`` > 1 the worlds run in that many processes; the rows are the same prefix as with one (a world
+    finished beyond it is dropped), so the result does not depend on ``jobs``."""
+    rows: list = []
+    keep = keep or (lambda row: None)
+    if jobs <= 1:
+        for s in range(seed, seed + max_draws):
+            rows.append(one(s))
+            keep(rows[-1])
+            if enough(rows, n_detectable):
+                break
+        return rows
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    done: dict = {}
+    with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
+        running = {ex.submit(one, s): s for s in range(seed, seed + min(jobs, max_draws))}
+        nxt = seed + len(running)
+        while running and not enough(rows, n_detectable):
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for f in finished:
+                done[running.pop(f)] = f.result()
+            while seed + len(rows) in done and not enough(rows, n_detectable):   # the prefix in seed order
+                rows.append(done.pop(seed + len(rows)))
+                keep(rows[-1])
+            while len(running) < jobs and nxt < seed + max_draws and not enough(rows, n_detectable):
+                running[ex.submit(one, nxt)] = nxt
+                nxt += 1
+        for f in running:
+            f.cancel()
+    return rows
+
+
+def run(n_detectable: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
+        detail: str = DETAIL_PATH, max_draws: int | None = None) -> dict:
+    """The flat figures of the draws from ``seed`` until ``n_detectable`` detectable worlds (at most ``max_draws``,
+    default :data:`MAX_DRAWS_FACTOR` x ``n_detectable``); each world's row is printed as it comes and the rows so
+    far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
     from functools import partial
     from femcheck.report.atomic import write_text_atomic
-    seeds = range(seed, seed + n_worlds)
-    one = partial(run_world, mesh=mesh)
+    max_draws = MAX_DRAWS_FACTOR * n_detectable if max_draws is None else int(max_draws)
     rows: list = []
 
     def keep(row, done: bool = False):
@@ -340,26 +412,25 @@ def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "co
             rows.append(row)
             print(_line(row), flush=True)
         write_text_atomic(detail, json.dumps({"complete": done, "worlds": rows}, indent=2) + "\n")
-    if jobs <= 1:
-        for s in seeds:
-            keep(one(s))
-    else:
-        with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
-            for row in ex.map(one, seeds):
-                keep(row)
+    draw_until(partial(run_world, mesh=mesh), seed, n_detectable, max_draws, jobs, keep)
     keep(None, done=True)
     fig = summarize(rows)
     fig.pop("rows")
-    return {**fig, "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
+    return {"detectable_worlds_asked": n_detectable, "max_draws": max_draws,
+            "detectable_worlds_reached": bool(fig["worlds_detectable"] >= n_detectable), **fig,
+            "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
 
 
 def table(figures: dict) -> str:
-    """The confusion tables of the single changes (strict first named element; the first named alias group), from
-    the rows the run kept (``make bench``'s summary)."""
+    """The confusion tables of the single changes (strict first named element; the first named alias group) over
+    the detectable worlds, then the first named alias group over every scored draw, from the rows the run kept
+    (``make bench``'s summary)."""
     rows = [r for r in json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"]
             if "world_failed" not in r]
-    return (confusion_table(rows) + "\n\nwith the alias groups the diagnosis declares:\n"
-            + confusion_table(rows, "first_group"))
+    seen = [r for r in rows if r["detectable"]]
+    return ("detectable worlds (every change SNR >= %g):\n" % DETECTABLE_SNR + confusion_table(seen)
+            + "\n\nwith the alias groups the diagnosis declares:\n" + confusion_table(seen, "first_group")
+            + "\n\nall draws, with the alias groups:\n" + confusion_table(rows, "first_group"))
 
 
 def _line(r: dict) -> str:
@@ -367,13 +438,18 @@ def _line(r: dict) -> str:
         return f"seed {r['seed']}: {_short(r['changes'])} -> world FE failed: {r['world_failed']} (not scored)"
     groups = "; ".join(" \u2261 ".join(g["members"]) for g in r.get("alias_groups", []))
     snr = ", ".join(f"{c['snr']:.1f}" for c in r["changes"])
-    return (f"seed {r['seed']}: {_short(r['changes'])} (SNR {snr}) -> {', '.join(r['named']) or 'none'}"
+    seen = "detectable" if r["detectable"] else ("undetectable, honest" if r["honest"] else "undetectable, WRONG NAME")
+    return (f"seed {r['seed']}: {_short(r['changes'])} (SNR {snr}; {seen}) -> {', '.join(r['named']) or 'none'}"
             f"{' [' + groups + ']' if groups else ''} ({r['verdict']}, {r['cpu_s']} s CPU)")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m femcheck.bench.physical_worlds", description=__doc__.split("\n")[0])
-    ap.add_argument("--worlds", type=int, default=WORLDS)
+    ap.add_argument("--worlds", type=int, default=WORLDS,
+                    help="detectable worlds to draw until (every draw, detectable or not, is kept and reported)")
+    ap.add_argument("--max-draws", type=int, default=None,
+                    help=f"stop after this many draws even short of --worlds detectable ones (default "
+                         f"{MAX_DRAWS_FACTOR} x --worlds)")
     ap.add_argument("--seed", type=int, default=SEED)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--mesh", choices=("coarse", "default"), default="coarse",
@@ -381,12 +457,15 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="reports/bench/physical_worlds.json")
     ap.add_argument("--detail", default=DETAIL_PATH, help="each world's row (JSON)")
     a = ap.parse_args(argv)
+    if a.worlds < 1 or (a.max_draws is not None and a.max_draws < a.worlds):
+        print(f"--worlds {a.worlds} / --max-draws {a.max_draws}: expected --worlds >= 1 and --max-draws >= --worlds")
+        return 2
     from femcheck.bench.__main__ import machine
     from femcheck.report.atomic import write_text_atomic
     t0 = time.perf_counter()
-    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail)
+    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail, a.max_draws)
     command = (f"python -m femcheck.bench.physical_worlds --worlds {a.worlds} --seed {a.seed} --jobs {a.jobs}"
-               f" --mesh {a.mesh}")
+               f" --mesh {a.mesh}" + (f" --max-draws {a.max_draws}" if a.max_draws is not None else ""))
     fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig, "command": command}
     write_text_atomic(a.out, json.dumps(fig, indent=2) + "\n")
     print(json.dumps(fig, indent=2))
