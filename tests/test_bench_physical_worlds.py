@@ -149,3 +149,13 @@ def test_draws_stop_at_the_detectable_count_whatever_the_jobs():
     two = [r["seed"] for r in draw_until(_fake_world, 10, 5, 100, jobs=2)]
     assert one == two == list(range(10, 17))
     assert [r["seed"] for r in draw_until(_fake_world, 10, 5, 4)] == [10, 11, 12, 13]
+
+
+def test_pin_worlds_draw_the_standard_dowel_pins_below_the_case(case):
+    """The reference Ø2 mm pin (radius 1 mm) gives way to Ø1.5 and Ø1 mm (ISO 8734 / ISO 2338 sizes): factors 0.75 and
+    0.5 exactly; every pin world over 60 seeds is one of them."""
+    from femcheck.bench.physical_worlds import pin_factors
+    assert case.universal_joint.pin_radius_m == 1e-3
+    assert pin_factors(case) == (0.75, 0.5)
+    drawn = {c["factor"] for s in range(60) for c in draw_world(s, case)["changes"] if c["change"] == "pin_radius"}
+    assert drawn == {0.75, 0.5}

@@ -8,9 +8,12 @@ says which case values a change sets):
   :data:`TUBE_MATERIALS` (magnesium alloy AZ31B, or glass-fibre polyamide PA66-GF30; a material of their own, the
   guideways and yokes keep the aluminium);
 - ``guideway_section``: the guideway bar's width and depth x U(0.82, 0.88) (bending and torsion ~ s^-4);
-- ``pin_radius``: the U-joint pin radius x one of :data:`PIN_FACTORS` (seeded draw from a grid, so that the
-  U joint's contact FE, minutes of CPU, is measured once per factor and reused; on the coarse joint mesh its
-  contact FE does not converge below x 0.88: a thinner pin bends into the bore outside the candidate band);
+- ``pin_radius``: the U-joint pins replaced by the next smaller standard dowel pins: a seeded draw among the
+  :data:`PIN_SIZES_BELOW` nominal diameters of :data:`PIN_DIAMETERS_M` (ISO 8734 / ISO 2338 series) below the
+  case's pin diameter (the reference's Ø2 mm pin: Ø1.5 mm, x 0.75, or Ø1 mm, x 0.5). A thinner pin bends into its
+  bore away from the loaded lines; the U joint's contact FE widens its candidate band until the contact stays inside
+  it (:func:`femcheck.fe_device.joint_models.solve_widening`); each size is measured once (minutes of CPU) and
+  cached on disk by its inputs;
 - ``cable_modulus``: the cable modulus x U(0.55, 0.7),
 
 in one random leg or in all six; a world holds one change or two changes of different elements (1/2 each).
@@ -43,17 +46,25 @@ series on the link's line when the joints slip). Each rate is given two ways:
 - ``wrong_whole_leg``: ``leg_softening`` is named;
 - ``legs_right``: the named located cause of the first changed element holds exactly its legs.
 
-**Detectability.** A change whose effect on the readings is below their scatter cannot be named by any method. Each
-changed element's signal-to-noise ratio is the RMS over the total readings of the change it alone makes to the
-noise-free device-FE deflection (total - preload; the world with only that change against the unchanged FE world,
-:func:`femcheck.experiment.dial_gauge.device_change_rms`) over the reading scatter ``SCATTER_M``; a world is
-*detectable* when every changed element has SNR >= :data:`DETECTABLE_SNR`. The rates are reported over all worlds and
-over the detectable ones (``*_detectable``), with their counts.
+**Detectability and what is scored.** A change whose effect on the readings is below their scatter cannot be named
+by any method. Each changed element's signal-to-noise ratio is the RMS over the total readings of the change it alone
+makes to the noise-free device-FE deflection (total - preload; the world with only that change against the unchanged
+FE world, :func:`femcheck.experiment.dial_gauge.device_change_rms`) over the reading scatter ``SCATTER_M``; a world is
+*detectable* when every changed element has SNR >= :data:`DETECTABLE_SNR`. A run draws seeded random worlds (seeds S,
+S + 1, ...) until it holds ``--worlds`` detectable ones (:func:`draw_until`; at most :data:`MAX_DRAWS_FACTOR` x as
+many draws) and keeps every draw. The headline rates (``right_element_first_rate``, ``both_changes_named_rate``,
+``wrong_whole_leg_rate`` and the ``_strict`` ones) are over the **detectable worlds**; the same rates over every
+scored draw sit beside them as ``*_all_draws``. An undetectable draw asks no name of the diagnosis, only that it
+does not name a wrong one: ``honesty_rate_undetectable`` is the share of undetectable draws where no named cause is
+of an unchanged element (named none, or each named cause is a changed element alone or declares one in its alias
+group). A draw whose own FE fails has no readings: kept, listed in ``worlds_failed_seeds``, not scored.
 
-Figures (flat keys): the rates over the worlds (and over singles and pairs), the confusion of the single changes
-(changed element -> first named element) and of the pairs as text, CPU per world; each world's row goes to
-``reports/bench/detail/physical_worlds_worlds.json``. ``python -m femcheck.bench physical_worlds`` (``WORLDS``
-worlds, seed 2026) or ``python -m femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
+Figures (flat keys, :data:`DEFINITIONS` written into them): the rates and counts over the detectable worlds and over
+all draws, the honesty of the undetectable draws, the confusion of the single changes (changed element -> first
+named alias group) and of the pairs as text (detectable; ``*_all_draws``), each undetectable draw and what was named,
+CPU per world; each world's row goes to ``reports/bench/detail/physical_worlds_worlds.json``. ``python -m
+femcheck.bench physical_worlds`` (until ``WORLDS`` detectable worlds, seed 2026) or ``python -m
+femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
 """
 from __future__ import annotations
 
@@ -74,8 +85,10 @@ DIRECTIONS = ("+x", "+y", "+z", "-x", "-y", "-z")
 CHANGES = ("proximal_link_modulus", "guideway_section", "pin_radius", "cable_modulus")
 #: the chain element each change moves
 ELEMENT = {"proximal_link_modulus": "prox", "guideway_section": "lg", "pin_radius": "uj", "cable_modulus": "act"}
-#: the pin-radius factors a world draws from
-PIN_FACTORS = (0.88, 0.9)
+#: nominal diameters (m) of standard dowel pins (ISO 8734 hardened, ISO 2338 unhardened; the sizes both series
+#: share up to 6 mm) and how many of the next smaller ones a ``pin_radius`` world draws from
+PIN_DIAMETERS_M = (1.0e-3, 1.5e-3, 2.0e-3, 2.5e-3, 3.0e-3, 4.0e-3, 5.0e-3, 6.0e-3)
+PIN_SIZES_BELOW = 2
 #: the tube materials a ``proximal_link_modulus`` world draws from: {name: (E Pa, nu, density kg/m^3)}; room
 #: temperature handbook values: magnesium alloy AZ31B-H24 (ASM Handbook vol. 2), glass-fibre polyamide PA66-GF30
 #: dry as moulded (typical injection-moulding grade datasheets: tensile modulus ~10 GPa)
@@ -109,11 +122,21 @@ def changed_case(case, change: str, factor: float, material: str | None = None) 
     raise ValueError(f"unknown change {change!r}; expected one of {', '.join(CHANGES)}")
 
 
+def pin_factors(case) -> tuple:
+    """The radius factors of the :data:`PIN_SIZES_BELOW` standard pin diameters next below the case's pin."""
+    d = 2.0 * case.universal_joint.pin_radius_m
+    below = [x for x in PIN_DIAMETERS_M if x < d * (1.0 - 1e-9)][-PIN_SIZES_BELOW:]
+    if not below:
+        raise ValueError(f"pin diameter {d * 1e3:g} mm: no standard dowel pin below it in PIN_DIAMETERS_M")
+    return tuple(x / d for x in reversed(below))
+
+
 def draw_factor(rng, case, change: str) -> tuple[float, str | None]:
     """The seeded magnitude of ``change`` (module doc): (factor, tube material name or None); for a tube material
     the factor is its modulus over the case's tube modulus."""
     if change == "pin_radius":
-        return float(PIN_FACTORS[int(rng.integers(len(PIN_FACTORS)))]), None
+        sizes = pin_factors(case)
+        return float(sizes[int(rng.integers(len(sizes)))]), None
     if change == "proximal_link_modulus":
         name = sorted(TUBE_MATERIALS)[int(rng.integers(len(TUBE_MATERIALS)))]
         return TUBE_MATERIALS[name][0] / case.proximal_link.material.E_Pa, name
