@@ -324,10 +324,12 @@ def _rates(rows: list, suffix: str) -> dict:
         out[f"{key}_rate{tail}{suffix}"] = _rate(rs, src)
         out[f"{key}_count{tail}{suffix}"] = int(sum(r[src] for r in rs))
     out[f"worlds{suffix}"], out[f"pairs{suffix}"] = len(rows), len(pairs)
-    out[f"singles{suffix}"] = len(rows) - len(pairs)
-    out[f"legs_right_rate{suffix}"] = _rate(rows, "legs_right")
-    out[f"explained_rate{suffix}"] = _rate([{"x": r["verdict"] == "explained"} for r in rows], "x")
-    out[f"first_alias_group_size_mean{suffix}"] = (
+    if suffix:   # the descriptive figures below: the headline (detectable) set only
+        return out
+    out["singles"] = len(rows) - len(pairs)
+    out["legs_right_rate"] = _rate(rows, "legs_right")
+    out["explained_rate"] = _rate([{"x": r["verdict"] == "explained"} for r in rows], "x")
+    out["first_alias_group_size_mean"] = (
         round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3) if rows else None)
     return out
 
