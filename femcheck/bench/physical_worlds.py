@@ -246,7 +246,8 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     d = diagnose(model, readings, with_baseline=False).as_json()
     changes = [{**c, "snr": round(float(s), 2)} for c, s in zip(w["changes"], snr["each"])]
     row = {"seed": seed, "changes": changes, "verdict": d["verdict"], "chain_joints": model.joints,
-           "causes": [{"id": c["id"], "legs": c.get("legs", []), "probability": c["probability"]} for c in d["causes"]],
+           "causes": [{"id": c["id"], "legs": c.get("legs", []), "probability": c["probability"],
+                       "params": c.get("params")} for c in d["causes"]],
            "alias_groups": [{"cause": g["cause"], "legs": g["legs"], "members": [m["label"] for m in g["members"]],
                              "probability": g["probability"]} for g in d["alias_groups"]],
            **score(w["changes"], d["causes"], d["alias_groups"]), "snr_world": round(float(snr["world"]), 2),
