@@ -64,17 +64,24 @@ class _AitkenSecant:
     d ρ / (1 - ρ) with d the step, ρ the ratio of consecutive steps (Aitken), so the iterate jumps there. Safeguards:
     only after ``ACCEL_AFTER`` plain iterations, only when two consecutive steps point along one direction (cosine
     > ``ACCEL_COSINE``, relative components) with ``ACCEL_RATIO`` < ρ < ``ACCEL_RATIO_MAX``, never to a negative
-    spring, and two plain steps between extrapolations. Convergence is still judged on a plain step, so the state
+    spring, two plain steps between extrapolations, and never again in this solve once the plain step after a jump
+    is not smaller than the one before it (more than one slow mode, or a stick/slip switch: the jump did not help). Convergence is still judged on a plain step, so the state
     returned is a fixed point of the secant law to the same tolerance."""
 
     def __init__(self):
-        self.iteration, self.step, self.extrapolations = 0, None, 0
+        self.iteration, self.step, self.extrapolations, self.off = 0, None, 0, False
+        self.jumped_from = None   # the relative step size before the last extrapolation
 
     def __call__(self, x_old: np.ndarray, x_new: np.ndarray) -> np.ndarray:
         self.iteration += 1
         step = x_new - x_old
         prev, self.step = self.step, step
-        if prev is None or self.iteration <= ACCEL_AFTER:
+        size = float(np.max(np.abs(step) / np.maximum(np.maximum(np.abs(x_old), np.abs(x_new)), 1e-300)))
+        if self.jumped_from is not None:
+            # the first plain step after a jump must be smaller than the one before it, else the map is not one
+            # linear mode here (two modes, a stick/slip switch): plain iteration from now on
+            self.off, self.jumped_from = self.off or size >= self.jumped_from, None
+        if self.off or prev is None or self.iteration <= ACCEL_AFTER:
             return x_new
         # both steps relative to one scale (springs of N/m and N m/rad side by side), the ratio then unbiased
         scale = np.maximum(np.abs(x_new), 1e-300)
@@ -90,6 +97,7 @@ class _AitkenSecant:
             return x_new
         self.step = None   # the next ratio is measured on two plain steps again
         self.extrapolations += 1
+        self.jumped_from = size
         return x
 
 
