@@ -51,3 +51,25 @@ def test_aitken_step_only_for_slow_monotone_convergence(monkeypatch):
         assert bool(acc.extrapolations) == jumps
         if jumps:
             np.testing.assert_allclose(out, 1.0, rtol=1e-12)
+
+
+def test_no_more_jumps_once_a_jump_did_not_shrink_the_step(monkeypatch):
+    """A jump on x_{n+1} = 0.92 x_n + 0.08, then a plain step larger than the one before the jump (a map that is not
+    one linear mode there): no further jump in that solve, although the next steps are again slow and monotone; a
+    jump followed by a smaller step keeps the acceleration on."""
+    monkeypatch.setattr(loads, "ACCEL_AFTER", 1)
+    for worse, off in ((True, True), (False, False)):
+        acc, x = loads._AitkenSecant(), np.array([3.0, 5.0])
+        while not acc.extrapolations:
+            before = 0.08 * (x - 1.0)
+            new = 0.92 * x + 0.08
+            x = acc(x, new)
+        step = 2.0 * before if worse else 0.1 * before   # the plain step after the jump, larger or smaller
+        x = acc(x, x - step)
+        assert acc.off == off
+        for _ in range(4):   # slow monotone steps again
+            new = 0.92 * x + 0.08 + 0.5
+            out = acc(x, new)
+            assert off is False or np.array_equal(out, new)
+            x = new
+        assert (acc.extrapolations == 1) == off
