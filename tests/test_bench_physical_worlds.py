@@ -128,7 +128,7 @@ def test_headline_rates_are_over_the_detectable_worlds_and_honesty_over_the_rest
     assert f["right_element_first_count"] == 2 and f["right_element_first_rate"] == round(2 / 3, 4)
     assert f["right_element_first_count_strict"] == 1   # seed 3's first named cause is the tube, by its group only
     assert f["both_changes_named_rate"] == 1.0 and f["both_changes_named_rate_strict"] == 0.0
-    assert f["worlds_all_draws"] == 6 and f["right_element_first_count_all_draws"] == 3   # + seed 5 by its group
+    assert f["pairs_all_draws"] == 1 and f["right_element_first_count_all_draws"] == 3   # + seed 5 by its group
     assert f["honesty_count_undetectable"] == 2 and f["honesty_rate_undetectable"] == round(2 / 3, 4)
     assert f["worlds_failed_seeds"] == "7"
     assert "lg>act 1" in f["confusion_singles_changed_to_first_named"]

@@ -328,7 +328,7 @@ def _rates(rows: list, suffix: str) -> dict:
         tail = "_strict" if src.endswith("_strict") else ""
         out[f"{key}_rate{tail}{suffix}"] = _rate(rs, src)
         out[f"{key}_count{tail}{suffix}"] = int(sum(r[src] for r in rs))
-    out[f"worlds{suffix}"], out[f"pairs{suffix}"] = len(rows), len(pairs)
+    out[f"pairs{suffix}"] = len(pairs)   # the worlds: worlds_detectable, worlds_drawn - worlds_failed
     if suffix:   # the descriptive figures below: the headline (detectable) set only
         return out
     out["singles"] = len(rows) - len(pairs)
