@@ -64,12 +64,13 @@ class _AitkenSecant:
     d ρ / (1 - ρ) with d the step, ρ the ratio of consecutive steps (Aitken), so the iterate jumps there. Safeguards:
     only after ``ACCEL_AFTER`` plain iterations, only when two consecutive steps point along one direction (cosine
     > ``ACCEL_COSINE``, relative components) with ``ACCEL_RATIO`` < ρ < ``ACCEL_RATIO_MAX``, never to a negative
-    spring, two plain steps between extrapolations, and never again in this solve once the plain step after a jump
-    is not smaller than the one before it (more than one slow mode, or a stick/slip switch: the jump did not help). Convergence is still judged on a plain step, so the state
+    spring, two plain steps between extrapolations, and ``ACCEL_AFTER`` plain steps before the next one when the plain
+    step after a jump is not smaller than the one before it (more than one slow mode, or a stick/slip switch: the
+    jump did not help; the plain steps let the fast modes die out before the ratio is measured again). Convergence is still judged on a plain step, so the state
     returned is a fixed point of the secant law to the same tolerance."""
 
     def __init__(self):
-        self.iteration, self.step, self.extrapolations, self.off = 0, None, 0, False
+        self.iteration, self.step, self.extrapolations, self.held_until = 0, None, 0, 0
         self.jumped_from = None   # the relative step size before the last extrapolation
 
     def __call__(self, x_old: np.ndarray, x_new: np.ndarray) -> np.ndarray:
@@ -79,9 +80,11 @@ class _AitkenSecant:
         size = float(np.max(np.abs(step) / np.maximum(np.maximum(np.abs(x_old), np.abs(x_new)), 1e-300)))
         if self.jumped_from is not None:
             # the first plain step after a jump must be smaller than the one before it, else the map is not one
-            # linear mode here (two modes, a stick/slip switch): plain iteration from now on
-            self.off, self.jumped_from = self.off or size >= self.jumped_from, None
-        if self.off or prev is None or self.iteration <= ACCEL_AFTER:
+            # linear mode here (two modes, a stick/slip switch): ACCEL_AFTER plain steps before the next jump
+            if size >= self.jumped_from:
+                self.held_until = self.iteration + ACCEL_AFTER
+            self.jumped_from = None
+        if prev is None or self.iteration <= max(ACCEL_AFTER, self.held_until):
             return x_new
         # both steps relative to one scale (springs of N/m and N m/rad side by side), the ratio then unbiased
         scale = np.maximum(np.abs(x_new), 1e-300)
