@@ -98,3 +98,64 @@ def test_change_signal_is_the_rms_of_the_total_minus_preload_change(case):
     rms = device_change_rms(case, [_LinearWorld(1e-5), _LinearWorld(1.02e-5)], _LinearWorld(1e-5),
                             directions=("+x", "-y", "+z"))
     np.testing.assert_allclose(rms, [0.0, 2e-7 * 15.0], rtol=1e-9, atol=1e-15)
+
+
+def _row(seed, elements, detectable, causes, groups=()):
+    """A scored row as run_world writes it (changes in one leg each), from the causes the diagnosis named."""
+    changes = [{"element": e, "legs": [0], "snr": 5.0 if detectable else 1.0} for e in elements]
+    return {"seed": seed, "changes": changes, "verdict": "explained", "detectable": detectable, "cpu_s": 1.0,
+            "world_cpu_s": 0.5, **score(changes, causes, list(groups))}
+
+
+def test_headline_rates_are_over_the_detectable_worlds_and_honesty_over_the_rest():
+    """Headline rates count only the detectable worlds; *_all_draws every scored draw; a failed world is neither;
+    an undetectable draw is honest when it names nothing, the changed element, or a group holding it, and not when
+    it names an unchanged element (here 2 of 3)."""
+    from femcheck.bench.physical_worlds import summarize
+    uj1 = {"id": "universal_joint_in_legs", "legs": [0]}
+    pr1 = {"id": "proximal_link_in_legs", "legs": [0]}
+    group = {"cause": "proximal_link_in_legs", "legs": [0],
+             "members": [{"id": "proximal_link_in_legs"}, {"id": "universal_joint_in_legs"}]}
+    rows = [_row(1, ["act"], True, [{"id": "actuation_in_legs", "legs": [0]}]),          # right
+            _row(2, ["lg"], True, [{"id": "actuation_in_legs", "legs": [0]}]),           # wrong
+            _row(3, ["uj", "act"], True, [pr1, {"id": "actuation_compliance"}], [group]),  # both, by the group
+            _row(4, ["prox"], False, []),                                                # honest: none
+            _row(5, ["uj"], False, [pr1], [group]),                                      # honest: group has uj
+            _row(6, ["prox"], False, [{"id": "guideway_in_legs", "legs": [0]}]),        # not honest
+            {"seed": 7, "changes": [{"element": "lg", "legs": [0]}], "world_failed": "x", "cpu_s": 1.0}]
+    f = summarize(rows)
+    assert (f["worlds_drawn"], f["worlds_detectable"], f["worlds_undetectable"], f["worlds_failed"]) == (7, 3, 3, 1)
+    assert f["right_element_first_count"] == 2 and f["right_element_first_rate"] == round(2 / 3, 4)
+    assert f["right_element_first_count_strict"] == 1   # seed 3's first named cause is the tube, by its group only
+    assert f["both_changes_named_rate"] == 1.0 and f["both_changes_named_rate_strict"] == 0.0
+    assert f["pairs_all_draws"] == 1 and f["right_element_first_count_all_draws"] == 3   # + seed 5 by its group
+    assert f["honesty_count_undetectable"] == 2 and f["honesty_rate_undetectable"] == round(2 / 3, 4)
+    assert f["worlds_failed_seeds"] == "7"
+    assert "lg>act 1" in f["confusion_singles_changed_to_first_named"]
+    assert "prox>lg 1" in f["confusion_singles_changed_to_first_named_all_draws"]
+    assert "prox>" not in f["confusion_singles_changed_to_first_named"]   # undetectable draws stay out
+
+
+def _fake_world(seed):
+    """Every third seed undetectable (module level: picklable for the process pool)."""
+    return {"seed": seed, "detectable": seed % 3 != 0}
+
+
+def test_draws_stop_at_the_detectable_count_whatever_the_jobs():
+    """Seeds 10, 11 (detectable), 12 (not), 13, 14 (detectable), 15 (not), 16: the fifth detectable world is seed 16;
+    the same prefix with one process or two, and the cap stops short of the count."""
+    from femcheck.bench.physical_worlds import draw_until
+    one = [r["seed"] for r in draw_until(_fake_world, 10, 5, 100, jobs=1)]
+    two = [r["seed"] for r in draw_until(_fake_world, 10, 5, 100, jobs=2)]
+    assert one == two == list(range(10, 17))
+    assert [r["seed"] for r in draw_until(_fake_world, 10, 5, 4)] == [10, 11, 12, 13]
+
+
+def test_pin_worlds_draw_the_standard_dowel_pins_below_the_case(case):
+    """The reference Ø2 mm pin (radius 1 mm) gives way to Ø1.5 and Ø1 mm (ISO 8734 / ISO 2338 sizes): factors 0.75 and
+    0.5 exactly; every pin world over 60 seeds is one of them."""
+    from femcheck.bench.physical_worlds import pin_factors
+    assert case.universal_joint.pin_radius_m == 1e-3
+    assert pin_factors(case) == (0.75, 0.5)
+    drawn = {c["factor"] for s in range(60) for c in draw_world(s, case)["changes"] if c["change"] == "pin_radius"}
+    assert drawn == {0.75, 0.5}

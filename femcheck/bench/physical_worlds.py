@@ -8,9 +8,12 @@ says which case values a change sets):
   :data:`TUBE_MATERIALS` (magnesium alloy AZ31B, or glass-fibre polyamide PA66-GF30; a material of their own, the
   guideways and yokes keep the aluminium);
 - ``guideway_section``: the guideway bar's width and depth x U(0.82, 0.88) (bending and torsion ~ s^-4);
-- ``pin_radius``: the U-joint pin radius x one of :data:`PIN_FACTORS` (seeded draw from a grid, so that the
-  U joint's contact FE, minutes of CPU, is measured once per factor and reused; on the coarse joint mesh its
-  contact FE does not converge below x 0.88: a thinner pin bends into the bore outside the candidate band);
+- ``pin_radius``: the U-joint pins replaced by the next smaller standard dowel pins: a seeded draw among the
+  :data:`PIN_SIZES_BELOW` nominal diameters of :data:`PIN_DIAMETERS_M` (ISO 8734 / ISO 2338 series) below the
+  case's pin diameter (the reference's Ø2 mm pin: Ø1.5 mm, x 0.75, or Ø1 mm, x 0.5). A thinner pin bends into its
+  bore away from the loaded lines; the U joint's contact FE widens its candidate band until the contact stays inside
+  it (:func:`femcheck.fe_device.joint_models.solve_widening`); each size is measured once (minutes of CPU) and
+  cached on disk by its inputs;
 - ``cable_modulus``: the cable modulus x U(0.55, 0.7),
 
 in one random leg or in all six; a world holds one change or two changes of different elements (1/2 each).
@@ -43,17 +46,25 @@ series on the link's line when the joints slip). Each rate is given two ways:
 - ``wrong_whole_leg``: ``leg_softening`` is named;
 - ``legs_right``: the named located cause of the first changed element holds exactly its legs.
 
-**Detectability.** A change whose effect on the readings is below their scatter cannot be named by any method. Each
-changed element's signal-to-noise ratio is the RMS over the total readings of the change it alone makes to the
-noise-free device-FE deflection (total - preload; the world with only that change against the unchanged FE world,
-:func:`femcheck.experiment.dial_gauge.device_change_rms`) over the reading scatter ``SCATTER_M``; a world is
-*detectable* when every changed element has SNR >= :data:`DETECTABLE_SNR`. The rates are reported over all worlds and
-over the detectable ones (``*_detectable``), with their counts.
+**Detectability and what is scored.** A change whose effect on the readings is below their scatter cannot be named
+by any method. Each changed element's signal-to-noise ratio is the RMS over the total readings of the change it alone
+makes to the noise-free device-FE deflection (total - preload; the world with only that change against the unchanged
+FE world, :func:`femcheck.experiment.dial_gauge.device_change_rms`) over the reading scatter ``SCATTER_M``; a world is
+*detectable* when every changed element has SNR >= :data:`DETECTABLE_SNR`. A run draws seeded random worlds (seeds S,
+S + 1, ...) until it holds ``--worlds`` detectable ones (:func:`draw_until`; at most :data:`MAX_DRAWS_FACTOR` x as
+many draws) and keeps every draw. The headline rates (``right_element_first_rate``, ``both_changes_named_rate``,
+``wrong_whole_leg_rate`` and the ``_strict`` ones) are over the **detectable worlds**; the same rates over every
+scored draw sit beside them as ``*_all_draws``. An undetectable draw asks no name of the diagnosis, only that it
+does not name a wrong one: ``honesty_rate_undetectable`` is the share of undetectable draws where no named cause is
+of an unchanged element (named none, or each named cause is a changed element alone or declares one in its alias
+group). A draw whose own FE fails has no readings: kept, listed in ``worlds_failed_seeds``, not scored.
 
-Figures (flat keys): the rates over the worlds (and over singles and pairs), the confusion of the single changes
-(changed element -> first named element) and of the pairs as text, CPU per world; each world's row goes to
-``reports/bench/detail/physical_worlds_worlds.json``. ``python -m femcheck.bench physical_worlds`` (``WORLDS``
-worlds, seed 2026) or ``python -m femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
+Figures (flat keys, :data:`DEFINITIONS` written into them): the rates and counts over the detectable worlds and over
+all draws, the honesty of the undetectable draws, the confusion of the single changes (changed element -> first
+named alias group) and of the pairs as text (detectable; ``*_all_draws``), each undetectable draw and what was named,
+CPU per world; each world's row goes to ``reports/bench/detail/physical_worlds_worlds.json``. ``python -m
+femcheck.bench physical_worlds`` (until ``WORLDS`` detectable worlds, seed 2026) or ``python -m
+femcheck.bench.physical_worlds --worlds N --seed S --jobs J``.
 """
 from __future__ import annotations
 
@@ -64,7 +75,9 @@ import time
 import numpy as np
 
 AREA = "physical_worlds"
+#: detectable worlds a run draws until (every draw kept), and the most draws it makes per detectable world asked
 WORLDS = 30
+MAX_DRAWS_FACTOR = 4
 SEED = 2026
 CASE_PATH = "cases/haptic_6psu.toml"
 DETAIL_PATH = "reports/bench/detail/physical_worlds_worlds.json"
@@ -72,8 +85,10 @@ DIRECTIONS = ("+x", "+y", "+z", "-x", "-y", "-z")
 CHANGES = ("proximal_link_modulus", "guideway_section", "pin_radius", "cable_modulus")
 #: the chain element each change moves
 ELEMENT = {"proximal_link_modulus": "prox", "guideway_section": "lg", "pin_radius": "uj", "cable_modulus": "act"}
-#: the pin-radius factors a world draws from
-PIN_FACTORS = (0.88, 0.9)
+#: nominal diameters (m) of standard dowel pins (ISO 8734 hardened, ISO 2338 unhardened; the sizes both series
+#: share up to 6 mm) and how many of the next smaller ones a ``pin_radius`` world draws from
+PIN_DIAMETERS_M = (1.0e-3, 1.5e-3, 2.0e-3, 2.5e-3, 3.0e-3, 4.0e-3, 5.0e-3, 6.0e-3)
+PIN_SIZES_BELOW = 2
 #: the tube materials a ``proximal_link_modulus`` world draws from: {name: (E Pa, nu, density kg/m^3)}; room
 #: temperature handbook values: magnesium alloy AZ31B-H24 (ASM Handbook vol. 2), glass-fibre polyamide PA66-GF30
 #: dry as moulded (typical injection-moulding grade datasheets: tensile modulus ~10 GPa)
@@ -107,11 +122,21 @@ def changed_case(case, change: str, factor: float, material: str | None = None) 
     raise ValueError(f"unknown change {change!r}; expected one of {', '.join(CHANGES)}")
 
 
+def pin_factors(case) -> tuple:
+    """The radius factors of the :data:`PIN_SIZES_BELOW` standard pin diameters next below the case's pin."""
+    d = 2.0 * case.universal_joint.pin_radius_m
+    below = [x for x in PIN_DIAMETERS_M if x < d * (1.0 - 1e-9)][-PIN_SIZES_BELOW:]
+    if not below:
+        raise ValueError(f"pin diameter {d * 1e3:g} mm: no standard dowel pin below it in PIN_DIAMETERS_M")
+    return tuple(x / d for x in reversed(below))
+
+
 def draw_factor(rng, case, change: str) -> tuple[float, str | None]:
     """The seeded magnitude of ``change`` (module doc): (factor, tube material name or None); for a tube material
     the factor is its modulus over the case's tube modulus."""
     if change == "pin_radius":
-        return float(PIN_FACTORS[int(rng.integers(len(PIN_FACTORS)))]), None
+        sizes = pin_factors(case)
+        return float(sizes[int(rng.integers(len(sizes)))]), None
     if change == "proximal_link_modulus":
         name = sorted(TUBE_MATERIALS)[int(rng.integers(len(TUBE_MATERIALS)))]
         return TUBE_MATERIALS[name][0] / case.proximal_link.material.E_Pa, name
@@ -176,11 +201,17 @@ def score(changes: list, causes: list, alias_groups: list = ()) -> dict:
     legs_right = any(len(els) == 1 and els[0] == first_change["element"]
                      and sorted(legs or (range(6) if n == "actuation_compliance" else [])) == first_change["legs"]
                      for n, els, legs in named)
+    # honest: no named cause claims an unchanged element (each is a changed element alone, or the diagnosis declares
+    # it inseparable from a changed element alone); naming nothing is honest
+    claims_right = [(len(els) == 1 and els[0] in truth)
+                    or any(len(g) == 1 and g[0] in truth for g in _group_of(c, alias_groups))
+                    for c, (_, els, _) in zip(real, named)]
     return {"named": [n for n, _, _ in named], "first_element": "+".join(first),
             "first_group": "\u2261".join("+".join(els) for els in first_group) or "+".join(first),
             "right_element_first_strict": bool(right_first), "right_element_first": bool(right_first_alias),
             "both_named_strict": bool(set(truth) <= own), "both_named": bool(set(truth) <= own_alias),
-            "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right)}
+            "wrong_whole_leg": any(n == "leg_softening" for n, _, _ in named), "legs_right": bool(legs_right),
+            "honest": bool(all(claims_right))}
 
 
 _ANCHORS: dict = {}
@@ -205,7 +236,11 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
         return {"seed": seed, "changes": w["changes"], "world_failed": str(exc).split(";")[0],
                 "cpu_s": round(time.process_time() - t0, 2)}
     t1 = time.process_time()
-    snr = signal_to_noise(case, w["changes"], world, mesh)
+    try:
+        snr = signal_to_noise(case, w["changes"], world, mesh)
+    except ConvergenceError as exc:   # a one-change world's FE has no answer: detectability unknown, not scored
+        return {"seed": seed, "changes": w["changes"], "world_failed": "one-change world: " + str(exc).split(";")[0],
+                "cpu_s": round(time.process_time() - t0, 2)}
     t2 = time.process_time()
     if mesh not in _ANCHORS:   # the unmodified case's: one per process, its gap table is shared by the worlds
         tot = readings.total_state
@@ -215,7 +250,8 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     d = diagnose(model, readings, with_baseline=False).as_json()
     changes = [{**c, "snr": round(float(s), 2)} for c, s in zip(w["changes"], snr["each"])]
     row = {"seed": seed, "changes": changes, "verdict": d["verdict"], "chain_joints": model.joints,
-           "causes": [{"id": c["id"], "legs": c.get("legs", []), "probability": c["probability"]} for c in d["causes"]],
+           "causes": [{"id": c["id"], "legs": c.get("legs", []), "probability": c["probability"],
+                       "params": c.get("params")} for c in d["causes"]],
            "alias_groups": [{"cause": g["cause"], "legs": g["legs"], "members": [m["label"] for m in g["members"]],
                              "probability": g["probability"]} for g in d["alias_groups"]],
            **score(w["changes"], d["causes"], d["alias_groups"]), "snr_world": round(float(snr["world"]), 2),
@@ -258,81 +294,147 @@ def confusion_table(rows: list, column: str = "first_element") -> str:
     return "\n".join(" | ".join(x[k].ljust(width[k]) for k in range(len(head))) for x in [head] + body)
 
 
-#: the definitions of the flat rates, written into the figures
+#: the definitions of the flat figures, written into the figures
 DEFINITIONS = {
-    "right_element_first_rate_strict": "share of worlds whose first named cause is a changed element alone",
-    "right_element_first_rate": "as _strict, or the first named cause heads an alias group that the diagnosis "
-                                "declares inseparable (readings within chi2 9) with a changed element alone among "
-                                "its members",
-    "both_changes_named_rate_strict": "share of two-change worlds where each changed element is named by a cause of "
-                                      "its own element",
-    "both_changes_named_rate": "as _strict, a member of a named cause's alias group also counting as named",
-    "wrong_whole_leg_rate": "share of worlds where leg_softening (a uniform whole-leg factor) is named",
     "detectable": f"every changed element alone moves the noise-free device-FE readings (total - preload) by an RMS "
-                  f">= {DETECTABLE_SNR:g} x the reading scatter {SCATTER_M * 1e6:g} um; *_detectable rates are over "
-                  f"those worlds only"}
+                  f">= {DETECTABLE_SNR:g} x the reading scatter {SCATTER_M * 1e6:g} um; a change below that is within "
+                  f"the scatter of each reading and no method can be asked to name it",
+    "draws": "seeded random worlds are drawn (seeds S, S+1, ...) until the detectable ones reach the number asked "
+             "for; every draw is kept and reported",
+    "right_element_first_rate": "over the detectable worlds: the first named cause is a changed element alone, or "
+                                "heads an alias group that the diagnosis declares inseparable (readings within chi2 "
+                                "9) with a changed element alone among its members",
+    "right_element_first_rate_strict": "over the detectable worlds: the first named cause is a changed element alone",
+    "both_changes_named_rate": "over the detectable two-change worlds: each changed element is named by a cause of "
+                               "its own element or by a member of a named cause's alias group",
+    "both_changes_named_rate_strict": "over the detectable two-change worlds: each changed element is named by a "
+                                      "cause of its own element",
+    "wrong_whole_leg_rate": "over the detectable worlds: leg_softening (a uniform whole-leg factor) is named",
+    "_all_draws": "the same rate over every scored draw, detectable or not (a world whose own FE failed has no "
+                  "readings and is not scored)",
+    "honesty_rate_undetectable": "over the undetectable draws: the diagnosis names no cause of an unchanged element "
+                                 "(it names none, or every named cause is a changed element alone or declares a "
+                                 "changed element alone in its alias group)",
+}
 
 
 def _rates(rows: list, suffix: str) -> dict:
     pairs = [r for r in rows if len(r["changes"]) == 2]
-    rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
-    count = lambda rs, k: int(sum(r[k] for r in rs))
     out = {}
     for key, src, rs in (("right_element_first", "right_element_first", rows),
                          ("right_element_first", "right_element_first_strict", rows),
                          ("both_changes_named", "both_named", pairs), ("both_changes_named", "both_named_strict", pairs),
                          ("wrong_whole_leg", "wrong_whole_leg", rows)):
         tail = "_strict" if src.endswith("_strict") else ""
-        out[f"{key}_rate{tail}{suffix}"] = rate(rs, src)
-        out[f"{key}_count{tail}{suffix}"] = count(rs, src)
-    out[f"worlds{suffix}"], out[f"pairs{suffix}"] = len(rows), len(pairs)
+        out[f"{key}_rate{tail}{suffix}"] = _rate(rs, src)
+        out[f"{key}_count{tail}{suffix}"] = int(sum(r[src] for r in rs))
+    out[f"pairs{suffix}"] = len(pairs)   # the worlds: worlds_detectable, worlds_drawn - worlds_failed
+    if suffix:   # the descriptive figures below: the headline (detectable) set only
+        return out
+    out["singles"] = len(rows) - len(pairs)
+    out["legs_right_rate"] = _rate(rows, "legs_right")
+    out["explained_rate"] = _rate([{"x": r["verdict"] == "explained"} for r in rows], "x")
+    out["first_alias_group_size_mean"] = (
+        round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3) if rows else None)
     return out
 
 
-def summarize(rows: list) -> dict:
-    """The flat figures over the worlds whose FE answered (``worlds_failed_seeds`` those whose did not: not scored)."""
-    failed = [r["seed"] for r in rows if "world_failed" in r]
-    rows = [r for r in rows if "world_failed" not in r]
-    singles = [r for r in rows if len(r["changes"]) == 1]
-    pairs = [r for r in rows if len(r["changes"]) == 2]
-    seen = [r for r in rows if r["detectable"]]
-    rate = lambda rs, k: round(float(np.mean([r[k] for r in rs])), 4) if rs else None
+def _rate(rows: list, key: str):
+    return round(float(np.mean([r[key] for r in rows])), 4) if rows else None
+
+
+def _confusions(rows: list, suffix: str) -> dict:
+    """The single changes (changed element > first named group) and the pairs (changed elements > the elements
+    named, each cause's, in order) as counted text."""
     confusion, named_pairs = {}, {}
-    for r in singles:
-        key = f"{r['changes'][0]['element']}>{r['first_group']}"
-        confusion[key] = confusion.get(key, 0) + 1
-    for r in pairs:   # changed elements -> the elements named (each cause's, in order)
-        got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
-        key = f"{'+'.join(sorted(c['element'] for c in r['changes']))}>{got}"
-        named_pairs[key] = named_pairs.get(key, 0) + 1
-    median = lambda k: round(float(np.median([r[k] for r in rows])), 2) if rows else None
-    snr = {el: [c["snr"] for r in rows for c in r["changes"] if c["element"] == el] for el in sorted(ELEMENT.values())}
-    return {"worlds_drawn": len(rows) + len(failed), "worlds_failed_seeds": ", ".join(map(str, failed)) or "none",
-            "singles": len(singles), **_rates(rows, ""), **_rates(seen, "_detectable"),
-            "legs_right_rate": rate(rows, "legs_right"),
-            "first_alias_group_size_mean": round(float(np.mean([r["first_group"].count("\u2261") + 1 for r in rows])), 3)
-            if rows else None,
-            "explained_rate": rate([{"x": r["verdict"] == "explained"} for r in rows], "x"),
+    for r in rows:
+        if len(r["changes"]) == 1:
+            key = f"{r['changes'][0]['element']}>{r['first_group']}"
+            confusion[key] = confusion.get(key, 0) + 1
+        else:
+            got = "+".join("+".join(CAUSE_ELEMENTS.get(n, ("other",))) for n in r["named"]) or "none"
+            key = f"{'+'.join(sorted(c['element'] for c in r['changes']))}>{got}"
+            named_pairs[key] = named_pairs.get(key, 0) + 1
+    return {f"confusion_singles_changed_to_first_named{suffix}":
+            ", ".join(f"{k} {v}" for k, v in sorted(confusion.items())) or "none",
+            f"pairs_changed_to_named{suffix}": ", ".join(f"{k} {v}" for k, v in sorted(named_pairs.items())) or "none"}
+
+
+def summarize(rows: list) -> dict:
+    """The flat figures of the draws (module doc, :data:`DEFINITIONS`): the headline rates over the detectable
+    worlds, the same over every scored draw (``*_all_draws``), the honesty of the undetectable draws; a draw whose
+    own FE failed (``worlds_failed_seeds``) has no readings and is not scored."""
+    failed = [r["seed"] for r in rows if "world_failed" in r]
+    scored = [r for r in rows if "world_failed" not in r]
+    seen = [r for r in scored if r["detectable"]]
+    unseen = [r for r in scored if not r["detectable"]]
+    median = lambda k: round(float(np.median([r[k] for r in scored])), 2) if scored else None
+    snr = {el: [c["snr"] for r in scored for c in r["changes"] if c["element"] == el] for el in sorted(ELEMENT.values())}
+    return {"worlds_drawn": len(rows), "worlds_detectable": len(seen), "worlds_undetectable": len(unseen),
+            "worlds_failed": len(failed), "worlds_failed_seeds": ", ".join(map(str, failed)) or "none",
+            "seeds_drawn": f"{rows[0]['seed']}-{rows[-1]['seed']}" if rows else "none",
+            **_rates(seen, ""), **_rates(scored, "_all_draws"),
+            "honesty_rate_undetectable": _rate(unseen, "honest"),
+            "honesty_count_undetectable": int(sum(r["honest"] for r in unseen)),
+            **_confusions(seen, ""), **_confusions(scored, "_all_draws"),
+            "undetectable_changed_to_named": ", ".join(
+                f"{r['seed']} {_short(r['changes'])}>{'+'.join(r['named']) or 'none'}" for r in unseen) or "none",
             "snr_median_by_element": ", ".join(f"{el} {np.median(v):.2f}" for el, v in snr.items() if v),
             "cpu_per_world_s_median": median("cpu_s"), "world_fe_cpu_s_median": median("world_cpu_s"),
             "world": "device FE of the modified case (solid parts, actuation FE, frictional contact joints with "
                      "contact-FE laws), leg by leg",
             "model": "chain of the unmodified case + its idealization gap to the device FE of the unmodified case",
             "definitions": "; ".join(f"{k}: {v}" for k, v in DEFINITIONS.items()),
-            "confusion_singles_changed_to_first_named": ", ".join(f"{k} {v}" for k, v in sorted(confusion.items())),
-            "pairs_changed_to_named": ", ".join(f"{k} {v}" for k, v in sorted(named_pairs.items())),
             "rows": rows}
 
 
-def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
-        detail: str = DETAIL_PATH) -> dict:
-    """The flat figures of ``n_worlds`` worlds from ``seed``; each world's row is printed as it comes and the rows
-    so far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
-    from concurrent.futures import ProcessPoolExecutor
+def enough(rows: list, n_detectable: int) -> bool:
+    """Whether ``rows`` (in seed order) hold ``n_detectable`` detectable worlds."""
+    return sum(1 for r in rows if r.get("detectable")) >= n_detectable
+
+
+def draw_until(one, seed: int, n_detectable: int, max_draws: int, jobs: int = 1, keep=None) -> list:
+    """Rows of the worlds ``seed``, ``seed + 1``, ... up to the first prefix holding ``n_detectable`` detectable
+    worlds (or ``max_draws`` draws); ``one(seed)`` gives a world's row, ``keep(row)`` sees each row in seed order.
+    With ``jobs`` > 1 the worlds run in that many processes; the rows are the same prefix as with one (a world
+    finished beyond it is dropped), so the result does not depend on ``jobs``."""
+    rows: list = []
+    keep = keep or (lambda row: None)
+    if jobs <= 1:
+        for s in range(seed, seed + max_draws):
+            rows.append(one(s))
+            keep(rows[-1])
+            if enough(rows, n_detectable):
+                break
+        return rows
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    done: dict = {}
+    with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
+        running = {ex.submit(one, s): s for s in range(seed, seed + min(jobs, max_draws))}
+        nxt = seed + len(running)
+        while running and not enough(rows, n_detectable):
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for f in finished:
+                done[running.pop(f)] = f.result()
+            while seed + len(rows) in done and not enough(rows, n_detectable):   # the prefix in seed order
+                rows.append(done.pop(seed + len(rows)))
+                keep(rows[-1])
+            while len(running) < jobs and nxt < seed + max_draws and not enough(rows, n_detectable):
+                running[ex.submit(one, nxt)] = nxt
+                nxt += 1
+        for f in running:
+            f.cancel()
+    return rows
+
+
+def run(n_detectable: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "coarse",
+        detail: str = DETAIL_PATH, max_draws: int | None = None) -> dict:
+    """The flat figures of the draws from ``seed`` until ``n_detectable`` detectable worlds (at most ``max_draws``,
+    default :data:`MAX_DRAWS_FACTOR` x ``n_detectable``); each world's row is printed as it comes and the rows so
+    far are kept in ``detail`` (JSON; a long run can be read before it ends)."""
     from functools import partial
     from femcheck.report.atomic import write_text_atomic
-    seeds = range(seed, seed + n_worlds)
-    one = partial(run_world, mesh=mesh)
+    max_draws = MAX_DRAWS_FACTOR * n_detectable if max_draws is None else int(max_draws)
     rows: list = []
 
     def keep(row, done: bool = False):
@@ -340,26 +442,25 @@ def run(n_worlds: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str = "co
             rows.append(row)
             print(_line(row), flush=True)
         write_text_atomic(detail, json.dumps({"complete": done, "worlds": rows}, indent=2) + "\n")
-    if jobs <= 1:
-        for s in seeds:
-            keep(one(s))
-    else:
-        with ProcessPoolExecutor(jobs) as ex:   # one world per process: each FE world and diagnosis is single-threaded
-            for row in ex.map(one, seeds):
-                keep(row)
+    draw_until(partial(run_world, mesh=mesh), seed, n_detectable, max_draws, jobs, keep)
     keep(None, done=True)
     fig = summarize(rows)
     fig.pop("rows")
-    return {**fig, "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
+    return {"detectable_worlds_asked": n_detectable, "max_draws": max_draws,
+            "detectable_worlds_reached": bool(fig["worlds_detectable"] >= n_detectable), **fig,
+            "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
 
 
 def table(figures: dict) -> str:
-    """The confusion tables of the single changes (strict first named element; the first named alias group), from
-    the rows the run kept (``make bench``'s summary)."""
+    """The confusion tables of the single changes (strict first named element; the first named alias group) over
+    the detectable worlds, then the first named alias group over every scored draw, from the rows the run kept
+    (``make bench``'s summary)."""
     rows = [r for r in json.loads(open(figures["detail_file"], encoding="utf-8").read())["worlds"]
             if "world_failed" not in r]
-    return (confusion_table(rows) + "\n\nwith the alias groups the diagnosis declares:\n"
-            + confusion_table(rows, "first_group"))
+    seen = [r for r in rows if r["detectable"]]
+    return ("detectable worlds (every change SNR >= %g):\n" % DETECTABLE_SNR + confusion_table(seen)
+            + "\n\nwith the alias groups the diagnosis declares:\n" + confusion_table(seen, "first_group")
+            + "\n\nall draws, with the alias groups:\n" + confusion_table(rows, "first_group"))
 
 
 def _line(r: dict) -> str:
@@ -367,13 +468,18 @@ def _line(r: dict) -> str:
         return f"seed {r['seed']}: {_short(r['changes'])} -> world FE failed: {r['world_failed']} (not scored)"
     groups = "; ".join(" \u2261 ".join(g["members"]) for g in r.get("alias_groups", []))
     snr = ", ".join(f"{c['snr']:.1f}" for c in r["changes"])
-    return (f"seed {r['seed']}: {_short(r['changes'])} (SNR {snr}) -> {', '.join(r['named']) or 'none'}"
+    seen = "detectable" if r["detectable"] else ("undetectable, honest" if r["honest"] else "undetectable, WRONG NAME")
+    return (f"seed {r['seed']}: {_short(r['changes'])} (SNR {snr}; {seen}) -> {', '.join(r['named']) or 'none'}"
             f"{' [' + groups + ']' if groups else ''} ({r['verdict']}, {r['cpu_s']} s CPU)")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m femcheck.bench.physical_worlds", description=__doc__.split("\n")[0])
-    ap.add_argument("--worlds", type=int, default=WORLDS)
+    ap.add_argument("--worlds", type=int, default=WORLDS,
+                    help="detectable worlds to draw until (every draw, detectable or not, is kept and reported)")
+    ap.add_argument("--max-draws", type=int, default=None,
+                    help=f"stop after this many draws even short of --worlds detectable ones (default "
+                         f"{MAX_DRAWS_FACTOR} x --worlds)")
     ap.add_argument("--seed", type=int, default=SEED)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--mesh", choices=("coarse", "default"), default="coarse",
@@ -381,12 +487,15 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="reports/bench/physical_worlds.json")
     ap.add_argument("--detail", default=DETAIL_PATH, help="each world's row (JSON)")
     a = ap.parse_args(argv)
+    if a.worlds < 1 or (a.max_draws is not None and a.max_draws < a.worlds):
+        print(f"--worlds {a.worlds} / --max-draws {a.max_draws}: expected --worlds >= 1 and --max-draws >= --worlds")
+        return 2
     from femcheck.bench.__main__ import machine
     from femcheck.report.atomic import write_text_atomic
     t0 = time.perf_counter()
-    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail)
+    fig = run(a.worlds, a.seed, a.jobs, a.mesh, a.detail, a.max_draws)
     command = (f"python -m femcheck.bench.physical_worlds --worlds {a.worlds} --seed {a.seed} --jobs {a.jobs}"
-               f" --mesh {a.mesh}")
+               f" --mesh {a.mesh}" + (f" --max-draws {a.max_draws}" if a.max_draws is not None else ""))
     fig = {"bench_wall_s": round(time.perf_counter() - t0, 3), **machine(), **fig, "command": command}
     write_text_atomic(a.out, json.dumps(fig, indent=2) + "\n")
     print(json.dumps(fig, indent=2))

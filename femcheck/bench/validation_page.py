@@ -58,8 +58,9 @@ AREA_TEXT = {
                        "of the compiled and numpy paths, against the retired 6-PSU kernel's recorded throughput.",
     "physical_worlds": "The diagnosis of the reference device against physically modified copies of its case "
                        "(material, section, pin radius, cable modulus; one leg or all; singles and pairs; the "
-                       "world is the device FE of the modified case, coarse mesh): element confusion and the rates "
-                       "of right answers.",
+                       "world is the device FE of the modified case, coarse mesh), drawn until 30 worlds are "
+                       "detectable (every change above 3 reading sigmas): element confusion and the rates of right "
+                       "answers over those, the same over all draws, and the honesty of the undetectable draws.",
     "serial_diagnose": "The self-weight diagnosis of serial robots: wall time on a 19-joint tree and the rates of right "
                        "answers on generated robots.",
     "solvers": "Every available sparse direct solver on three of femcheck's own systems: time and residual, each as a "

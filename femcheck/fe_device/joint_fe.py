@@ -72,6 +72,11 @@ class JointGeometryError(FemcheckError):
     """Initial interpenetration beyond the clearance, or a clearance the mesh cannot resolve."""
 
 
+class CandidateBandError(ConvergenceError):
+    """The solved contact reaches a point outside the candidate band (a pin bending into its bore away from the
+    loaded lines): the solve is not valid for this band; a wider one (:data:`CANDIDATE_BANDS`) may be."""
+
+
 @dataclasses.dataclass(frozen=True)
 class CondensedJoint:
     """Joint FE condensed onto its contact DOFs and reference node.
@@ -170,8 +175,9 @@ def _joint_mesh(case, joint: str, mesh: str, max_load_N, mesh_options):
 
 def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float | None = None,
                 friction: float | None = None, max_load_N: float | None = None,
-                mesh_options: dict | None = None, exact_gaps: bool = True) -> CondensedJoint:
+                mesh_options: dict | None = None, exact_gaps: bool = True, band: int = 0) -> CondensedJoint:
     """Mesh, assemble, constrain and condense one joint (module doc). ``friction`` defaults to the case's μ.
+    ``band``: index into :data:`CANDIDATE_BANDS` of the pin-in-bore candidate band (0: the loaded lines only).
 
     ``max_load_N``: the largest load the joint will carry; the ball-in-seat candidates are then the
     points of the Hertz patch and a margin (:func:`_hertz_candidates`) instead of the whole meshed contact
@@ -221,7 +227,9 @@ def build_joint(case, joint: str, mesh: str = "coarse", *, penalty_factor: float
     # universal joint pushed along +z by the link: the link bore (a2) closes on its first-contact line,
     # the cross lifts and the platform bore (a1) closes on its opposite line (across 2c)
     lines = ("opposite", "first") if joint == "universal" else ("both",)
-    cand = [_candidates(p, clearance, ln) for p, ln in zip(pairs, lines)]
+    widen, angle = CANDIDATE_BANDS[band]
+    lines = ("both",) * len(lines) if widen else lines
+    cand = [_candidates(p, clearance, ln, angle) for p, ln in zip(pairs, lines)]
     if joint == "spherical" and max_load_N is not None:
         cand = [c & _hertz_candidates(case, p, max_load_N) for c, p in zip(cand, pairs)]
     S, red_pairs, ref_r, nfree, nret, nfac, recover = _condense(K, C, pairs, cand, ref_b)
@@ -287,9 +295,14 @@ def _check_gaps(joint: str, pairs, clearance: float, h_c: float) -> None:
 
 #: candidate band of a pin in its bore: points within this angle of the bore's bottom or top line
 CANDIDATE_ANGLE_RAD = 0.35
+#: the candidate bands tried in turn when the contact leaves the previous one (:func:`solve_joint_widening`):
+#: (both lines of every bore, angle rad). First the loaded lines (the Hertz prediction); then both lines of each
+#: bore (a thin pin bends under the load: its ends lift off the loaded line and bear on the opposite one near the
+#: bore's mouth); then both lines at twice the angle (the bending rolls the contact further round the bore)
+CANDIDATE_BANDS = ((False, CANDIDATE_ANGLE_RAD), (True, CANDIDATE_ANGLE_RAD), (True, 2.0 * CANDIDATE_ANGLE_RAD))
 
 
-def _candidates(pair, clearance: float, lines: str = "both") -> np.ndarray:
+def _candidates(pair, clearance: float, lines: str = "both", angle_rad: float = CANDIDATE_ANGLE_RAD) -> np.ndarray:
     """Contact points kept in the iterations: the Hertz-predicted contact zones and a margin.
 
     Ball in seat: every point of the contact region (it is already the Hertz zone plus margin). Pin in
@@ -311,9 +324,9 @@ def _candidates(pair, clearance: float, lines: str = "both") -> np.ndarray:
         near = pair.g0 <= pair.g0.min() + 0.1 * clearance
         n0 = normal[near].mean(axis=0)
         cos = normal @ (n0 / np.linalg.norm(n0))
-        first, opposite = cos >= math.cos(CANDIDATE_ANGLE_RAD), cos <= -math.cos(CANDIDATE_ANGLE_RAD)
+        first, opposite = cos >= math.cos(angle_rad), cos <= -math.cos(angle_rad)
         return {"first": first, "opposite": opposite, "both": first | opposite}[lines]
-    band = clearance * (1.0 - math.cos(CANDIDATE_ANGLE_RAD))
+    band = clearance * (1.0 - math.cos(angle_rad))
     first, opposite = pair.g0 <= band, pair.g0 >= 2.0 * clearance - band
     return {"first": first, "opposite": opposite, "both": first | opposite}[lines]
 
@@ -506,9 +519,9 @@ def solve_joint(model: CondensedJoint, loads_N=(5.0, 20.0), axis_sign: float = -
         where = {"pair": pw.name, "point": k, "x_m": pw.points[k].tolist(), "g0_m": float(pw.g0[k])}
         log.info("%s: largest penetration growth over all contact points %.3g m at %s", model.joint, pen, where)
         if pen > 10.0 * penetration_tol:
-            raise ConvergenceError(f"{model.joint} joint: a contact point outside the Hertz-predicted candidate band "
-                                   f"penetrates by {pen:.3g} m ({where}); widen CANDIDATE_ANGLE_RAD",
-                                   list(res.residual_history), {"penetration_m": pen, "point": where})
+            raise CandidateBandError(f"{model.joint} joint: a contact point outside the candidate band penetrates "
+                                     f"by {pen:.3g} m ({where})", list(res.residual_history),
+                                     {"penetration_m": pen, "point": where})
     # the contact area of the test state: the closed points and the points whose gap is within
     # ``area_gap_rel`` of the approach increment (GPTS on P2 facets closes only a subset of the Gauss points
     # of the patch, the others open by round-off-size gaps; the stick state sticks the whole area)

@@ -231,13 +231,13 @@ def measure_joint_law(case, joint: str, mesh: str = "coarse", ladder=None, use_c
             log.info("%s joint law (%s mesh) read from the cache %s", joint, mesh, path.name)
             return hit
     t0 = time.perf_counter()
-    from femcheck.fe_device.joint_models import condensed_joint
-    model = condensed_joint(case, joint, mesh, max_load_N=float(ladder[-1]))
+    from femcheck.fe_device.joint_models import solve_widening
     # as check-joints: tolerance and starting patch from the FE's own estimate, stick the contact area
     tol, start = jf.contact_start(case, joint, (float(ladder[0]), float(ladder[-1])))
     sign = -1.0 if joint == "spherical" else 1.0
-    r = jf.solve_joint(model, tuple(ladder), sign, penetration_tol=tol, initial_gap_m=start,
-                       area_gap_rel=1e-3 if joint == "spherical" else 0.0, level_tangents=True)
+    r = solve_widening(case, joint, mesh, float(ladder[-1]), lambda model: jf.solve_joint(
+        model, tuple(ladder), sign, penetration_tol=tol, initial_gap_m=start,
+        area_gap_rel=1e-3 if joint == "spherical" else 0.0, level_tangents=True))
     law = MeasuredJointLaw(joint, mesh, ladder, np.asarray(r.axial_m, float), np.asarray(r.level_tangent_stiffness),
                            r.dofs, r.iterations, time.perf_counter() - t0)
     log.info("%s joint law measured (%s mesh, %d DOFs, %d contact iterations, %.1f s)", joint, mesh, r.dofs,
