@@ -88,17 +88,23 @@ def _joint_fe(case, joint: str, mesh: str, loads, progress=None) -> dict:
     """The contact-FE part of :func:`check_joint` (everything but the analytical column)."""
     from femcheck.fe_device import joint_fe as jf
 
-    from femcheck.fe_device.joint_models import condensed_joint
-    model = condensed_joint(case, joint, mesh, max_load_N=max(loads))
-    if progress:
-        progress(f"{joint}: mesh and condensation")
+    from femcheck.fe_device.joint_models import solve_widening
     tol, start = jf.contact_start(case, joint, loads)
     # spherical: the ball is pressed into the seat (−z); universal: the link pushes its yoke along +z
     sign = -1.0 if joint == "spherical" else 1.0
     # spherical: the stick state sticks the contact area (closed points and points within 1e-3 of the
-    # approach increment); universal: the closed points (as measured before)
-    r = jf.solve_joint(model, loads, sign, penetration_tol=tol, initial_gap_m=start,
-                       area_gap_rel=1e-3 if joint == "spherical" else 0.0)
+    # approach increment); universal: the closed points (as measured before). A thin pin that bends out of the
+    # loaded lines' band is solved again on a wider one, as the measured joint laws are.
+    first = [True]   # a flag, not the models: a failed narrower model must be free to go (its factorization)
+
+    def solve(m):
+        if progress and first[0]:       # one step per build however many bands are tried (the bars count two)
+            progress(f"{joint}: mesh and condensation")
+        first[0] = False
+        return m, jf.solve_joint(m, loads, sign, penetration_tol=tol, initial_gap_m=start,
+                                 area_gap_rel=1e-3 if joint == "spherical" else 0.0)
+
+    model, r = solve_widening(case, joint, mesh, max(loads), solve)
     if progress:
         progress(f"{joint}: contact solve")
     from femcheck.fe_device.mesh_levels import joint_mesh_sizes

@@ -295,7 +295,7 @@ def _check_gaps(joint: str, pairs, clearance: float, h_c: float) -> None:
 
 #: candidate band of a pin in its bore: points within this angle of the bore's bottom or top line
 CANDIDATE_ANGLE_RAD = 0.35
-#: the candidate bands tried in turn when the contact leaves the previous one (:func:`solve_joint_widening`):
+#: the candidate bands tried in turn when the contact leaves the previous one (:func:`femcheck.fe_device.joint_models.solve_widening`):
 #: (both lines of every bore, angle rad). First the loaded lines (the Hertz prediction); then both lines of each
 #: bore (a thin pin bends under the load: its ends lift off the loaded line and bear on the opposite one near the
 #: bore's mouth); then both lines at twice the angle (the bending rolls the contact further round the bore)
