@@ -244,6 +244,15 @@ def test_identify_world_bearings_catalogue_drives_json(capsys):
         assert len(err) == 1 and "--drives" in err[0]
 
 
+def test_make_data_refuses_an_unknown_drive_reading_and_writes_nothing(tmp_path, capsys):
+    """`--make-data --world bearings --drives linear`: exit 2, one line naming --drives, no DATA.csv left."""
+    path = tmp_path / "b.csv"
+    assert main(["identify", "cases/cobot7.toml", str(path), "--make-data", "--world", "bearings",
+                 "--drives", "linear"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--drives" in err[0] and not path.exists()
+
+
 def test_beam_world_says_it_is_a_check_of_the_assembly(capsys):
     assert main(["identify", "--help"]) == 0
     text = " ".join(re.sub("[\u2500-\u257f]", " ", capsys.readouterr().out).split())   # drop the help's box lines
