@@ -221,6 +221,7 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     import femcheck
     from femcheck.diagnose import diagnose
     from femcheck.diagnose.fe_model import FEAnchoredChainModel
+    from femcheck.diagnose.pin_law import pin_law_table
     from femcheck.experiment.device_fe_world import DeviceFEWorld
     from femcheck.experiment.dial_gauge import dial_campaign
     from femcheck.errors import ConvergenceError
@@ -244,8 +245,9 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     t2 = time.process_time()
     if mesh not in _ANCHORS:   # the unmodified case's: one per process, its gap table is shared by the worlds
         tot = readings.total_state
-        _ANCHORS[mesh] = FEAnchoredChainModel.nearest(case, DeviceFEWorld.of(case, mesh=mesh), readings.pose[tot],
-                                                      readings.force[tot])
+        device = DeviceFEWorld.of(case, mesh=mesh)
+        _ANCHORS[mesh] = FEAnchoredChainModel.nearest(case, device, readings.pose[tot], readings.force[tot],
+                                                      pin_laws=pin_law_table(case, device.joint_mesh))
     model = _ANCHORS[mesh]
     d = diagnose(model, readings, with_baseline=False).as_json()
     changes = [{**c, "snr": round(float(s), 2)} for c, s in zip(w["changes"], snr["each"])]

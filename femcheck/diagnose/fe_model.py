@@ -119,10 +119,18 @@ class FEAnchoredChainModel:
     (the effects scale the chain's element laws). ``device``: anything with ``tcp_displacement(pose, force)``
     (m, 3) of the unmodified case, e.g. :class:`femcheck.experiment.device_fe_world.DeviceFEWorld.of(case)`;
     it knows the case only, never the world the data come from. The gap is evaluated once per (poses, forces)
-    array and kept (a fit calls the model hundreds of times at the readings' states)."""
+    array and kept (a fit calls the model hundreds of times at the readings' states).
+
+    ``pin_laws`` (a :class:`femcheck.diagnose.pin_law.PinLawTable` of the case, optional): the U joint is then the
+    device FE's own, nonlinear over its pin. The U-joint column of the element scales is the pin's bending compliance
+    factor X (ρ^-4 for a pin of radius ρ r), and the chain's U joint of leg i at reading n takes the extra axial
+    deflection e(|f_ni|; X_ni) of the contact-FE laws at its link force f_ni (released statics,
+    :func:`~femcheck.diagnose.pin_law.link_forces`) as its secant, e / |f| on the joint's axial compliance. Without
+    it (or on a chain without a U joint) the column scales the chain's linear U-joint law."""
 
     chain: object
     device: object
+    pin_laws: object = None
     _gap: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -146,7 +154,7 @@ class FEAnchoredChainModel:
         return self.chain.base_scale
 
     @classmethod
-    def nearest(cls, case, device, pose, force, level: str = "detailed") -> "FEAnchoredChainModel":
+    def nearest(cls, case, device, pose, force, level: str = "detailed", pin_laws=None) -> "FEAnchoredChainModel":
         """Anchored on the chain of ``case`` (rigid or released joints) whose deflections at the states ``pose``
         (m, 6), ``force`` (m, 3) are nearer (RMS) to the ``device``'s: the joints the device FE behaves like (its
         frictional contact joints slip at the test loads: released), so that a cause moves the chain the way it
@@ -155,7 +163,7 @@ class FEAnchoredChainModel:
         fe = device.tcp_displacement(pose, force)
         chains = [AnalyticalChainModel(case, level, j) for j in ("rigid", "released")]
         rms = [float(np.sqrt(np.mean((c.tcp_displacement(pose, force, c.base_scale) - fe) ** 2))) for c in chains]
-        return cls(chains[int(np.argmin(rms))], device)
+        return cls(chains[int(np.argmin(rms))], device, pin_laws)
 
     def gap(self, pose, force) -> np.ndarray:
         """(m, 3) m: δ_FE − δ_chain at the nominal parameters.
@@ -188,7 +196,7 @@ class FEAnchoredChainModel:
                 b = rows[beyond]
                 out[b] = self._solve_gap(pose[b], force[b])
         if len(self._gap) >= 64:
-            self._gap.pop(next(k for k in self._gap if k != "tables"))
+            self._gap.pop(next(k for k in self._gap if k not in ("tables", "uj_axial")))
         self._gap[key] = out
         return out
 
@@ -197,8 +205,35 @@ class FEAnchoredChainModel:
                 - self.chain.tcp_displacement(pose, force, self.chain.base_scale))
 
     def tcp_displacement(self, pose, force, element_scale, joint_rotation_compliance=0.0) -> np.ndarray:
+        element_scale = self._pin_scale(pose, force, element_scale)
         return (self.chain.tcp_displacement(pose, force, element_scale, joint_rotation_compliance)
                 + self.gap(pose, force))
+
+    def _pin_scale(self, pose, force, element_scale) -> np.ndarray:
+        """``element_scale`` with the U-joint column read as the pin's bending compliance factor (class doc): (m, 6, 5)
+        chain scales whose U-joint column puts the contact-FE extra deflection e(|f|; X) on the chain's axial U-joint
+        compliance c = 1/K_UC + 1/K_UB as the secant 1 + e / (|f| c)."""
+        from femcheck.diagnose.model import UJ
+        base = np.asarray(self.chain.base_scale, float)
+        if self.pin_laws is None or base[0, UJ] == 0.0:
+            return element_scale
+        from femcheck.chain import device_parameters
+        from femcheck.diagnose.pin_law import link_forces
+        pose, force = np.asarray(pose, float), np.asarray(force, float)
+        scale = np.array(np.broadcast_to(element_scale, (len(pose), 6, 5)), float)
+        key = ("links", pose.tobytes(), force.tobytes())
+        f = self._gap.get(key)
+        if f is None:
+            f = self._gap[key] = np.abs(link_forces(self.case, pose, force))
+        p = self._gap.get("uj_axial")
+        if p is None:
+            q = device_parameters(self.case)
+            p = self._gap["uj_axial"] = (float(np.squeeze(q.c_uc + q.c_ub)), float(np.squeeze(q.F_min_sp)))
+        c, F_min = p
+        # the device FE's own floor: below F_min a joint keeps its secant at F_min (fe_device.loads)
+        F = np.maximum(f, F_min)
+        scale[:, :, UJ] = 1.0 + self.pin_laws.extra_approach(F, scale[:, :, UJ]) / (F * c)
+        return scale
 
     def tcp_stiffness(self, pose, force, element_scale=None, joint_rotation_compliance=0.0):
         """The chain's TCP stiffness (the seed 001 baseline's; the gap is a fixed offset, not a stiffness)."""

@@ -253,7 +253,9 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
     linear.sort(key=lambda t: t[0])
     out = []
     for score_lin, eff, t_full, _n_legs in linear[:keep]:
-        if score_lin > linear[0][0] + margin or score_lin >= chi2_0:
+        # the linear score ranks, the refinement decides: a law that is nonlinear in its scale (a thin pin stiffening
+        # as it bears on the opposite line of its bore) is far from its linearization at 1 however well it fits
+        if score_lin >= chi2_0:
             break
         # a linear minimum at all six legs is not taken as it is: a leg scale far from 1 (a near-rigid element,
         # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward

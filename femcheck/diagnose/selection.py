@@ -595,7 +595,7 @@ def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_
             moves += [(1 - i, e) for i, e in enumerate(fit.effects) if e.located and not fit.effects[1 - i].located]
             for i, other in moves:
                 eff = fit.effects[i]
-                screened = screen_placements(model, readings, located, keep=1,
+                screened = screen_placements(model, readings, located, keep=3,
                                              background=([other], [fit.values[1 - i]]))
                 if not screened or screened[0].effect == eff or screened[0].effect.id == other.id:
                     continue
