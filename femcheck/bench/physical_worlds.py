@@ -29,7 +29,11 @@ inputs), an unchanged joint is the reference's law.
 detailed chain plus its idealization gap to the device FE of the *unmodified* case on the same mesh (what a user
 can compute from the case alone): the unchanged world is explained with no cause, and the causes' effects are the
 chain's. The chain's joints are those nearer to that FE (:meth:`~.FEAnchoredChainModel.nearest`: released, as the
-frictional joints slip at the test loads).
+frictional joints slip at the test loads). Its U joint is the device FE's own: the contact-FE law of the case's pin
+and of pins of :data:`~femcheck.diagnose.pin_law.RADIUS_FACTORS` x its radius (:mod:`femcheck.diagnose.pin_law`,
+computed from the case alone), interpolated in the pin's bending compliance (r^-4), which is the U-joint factor a
+cause fits: a thin pin's stiffening is then the U joint's, not the ball's. The world's pins (0.75 and 0.5 x) lie
+between those nodes, so the diagnosis fits an interpolated law, never the one its world used.
 
 Scoring, per world: the element of each named cause (``<element>_in_legs`` its element; ``actuation_compliance``
 the actuation; the whole-device ids their elements: ``link_modulus`` guideway + proximal link,
@@ -73,6 +77,8 @@ import json
 import time
 
 import numpy as np
+
+from femcheck.diagnose.pin_law import RADIUS_FACTORS
 
 AREA = "physical_worlds"
 #: detectable worlds a run draws until (every draw kept), and the most draws it makes per detectable world asked
@@ -450,7 +456,8 @@ def run(n_detectable: int = WORLDS, seed: int = SEED, jobs: int = 1, mesh: str =
     fig.pop("rows")
     return {"detectable_worlds_asked": n_detectable, "max_draws": max_draws,
             "detectable_worlds_reached": bool(fig["worlds_detectable"] >= n_detectable), **fig,
-            "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail}
+            "cpu_s_total": round(sum(r["cpu_s"] for r in rows), 1), "mesh": mesh, "detail_file": detail,
+            "diagnosis_pin_law_radius_factors": ", ".join(f"{x:g}" for x in RADIUS_FACTORS)}
 
 
 def table(figures: dict) -> str:

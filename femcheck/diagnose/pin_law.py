@@ -19,7 +19,7 @@ along the first segment, above the last node along the last). It is what the FE-
 (:class:`femcheck.diagnose.fe_model.FEAnchoredChainModel`) adds to the chain's U joint when a cause moves that
 element: the U-joint column of the element scales then *is* X.
 
-Each node costs one contact-FE solve of the joint (about 1.5 min of CPU and 3.3 GB on the coarse mesh), cached
+Each node costs one contact-FE solve of the joint (1.5-2 min of CPU and up to 3.3 GB on the coarse mesh), cached
 on disk by its inputs like every measured law. Limits: axial law only (the stick lateral and rotational stiffness
 of a thin pin, and its lower friction moment μ F r_pin, are not carried); interpolation between nodes smears the
 load at which a pin in between starts to bear on the opposite line.
@@ -30,8 +30,10 @@ import dataclasses
 
 import numpy as np
 
-#: pin radius factors ρ of the nodes besides the case's own pin (bending compliance factors 3.16 and 16)
-RADIUS_FACTORS = (0.75, 0.5)
+#: pin radius factors ρ of the nodes besides the case's own pin (bending compliance factors 2.44, 7.72 and 24.4): a
+#: geometric-like spread from a slightly thinner pin to one under half the case's, off the standard dowel sizes next
+#: below a Ø2 mm pin (Ø1.5 and Ø1 mm: ρ = 0.75 and 0.5), so that such a pin is interpolated, never looked up
+RADIUS_FACTORS = (0.8, 0.6, 0.45)
 
 
 @dataclasses.dataclass(frozen=True)
