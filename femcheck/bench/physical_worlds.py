@@ -223,7 +223,9 @@ def score(changes: list, causes: list, alias_groups: list = ()) -> dict:
 _ANCHORS: dict = {}
 
 
-def run_world(seed: int, mesh: str = "coarse") -> dict:
+def run_world(seed: int, mesh: str = "coarse", world: dict | None = None) -> dict:
+    """One world's row (module doc): the world of ``seed`` (:func:`draw_world`), or ``world`` as given
+    ({"changes": [...], "data_seed": int}, e.g. a fixed world of a test)."""
     import femcheck
     from femcheck.diagnose import diagnose
     from femcheck.diagnose.fe_model import FEAnchoredChainModel
@@ -233,7 +235,7 @@ def run_world(seed: int, mesh: str = "coarse") -> dict:
     from femcheck.errors import ConvergenceError
     from femcheck.measured import process
     case = femcheck.load_case(CASE_PATH)
-    w = draw_world(seed, case)
+    w = world or draw_world(seed, case)
     t0 = time.process_time()
     world = DeviceFEWorld(case, leg_cases(case, w["changes"]), mesh=mesh)
     try:
