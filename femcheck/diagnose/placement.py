@@ -16,7 +16,9 @@ diagnosis):
    lowest score at all six free legs is not taken as it is: with the prior's leg factors N(1, 1) a leg can be near
    rigid (0.03), far from the linearization at 1, and the six free legs then always fit the linear model best;
    step 5 decides;
-5. for the types within ``margin`` (10) of the best (at most ``keep``, 3), the legs are chosen again *nonlinearly*
+5. for the ``keep`` (3) linearly best types that beat no change, whatever their distance to the best (a law that
+   is piecewise in its scale, a thin pin bearing in its bores, is far from its linearization at 1 however well it
+   fits), the legs are chosen again *nonlinearly*
    (a 2-3x softer element is far from the linearization at 1, and with all six legs free a uniform change of the
    element is nearly degenerate, so the backward path can end on the complement of the right legs): forward
    selection, adding the leg whose linearized step lowers chi^2 most at the current point, then three Gauss-Newton

@@ -576,7 +576,8 @@ def refit_pair_placements(model, readings, located, rivals, *, top: int = REFIT_
     is still in it: the legs it takes then partly fit that other cause (a guideway placed on five legs with odd factors
     where the guideways of all legs and the cables are softer), and the pair fitted from it stays there. For each of the
     ``top`` best pairs of ``rivals`` (by BIC) that hold a located cause, the placement of each located partner is
-    screened again (:func:`femcheck.diagnose.placement.screen_placements`, every element type) on the background of the
+    screened again (:func:`femcheck.diagnose.placement.screen_placements`, every element type ranked, the three best
+    refined) on the background of the
     other partner at its values *in the pair*, and the pair is refitted jointly from the screened leg scales; with two
     located partners they alternate, ``rounds`` times or until the placements stop changing. Every new pair joins the
     rivals and is weighed like the others (its extended-BIC penalty included). Returns (placements, explanations)."""
