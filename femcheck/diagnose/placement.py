@@ -56,9 +56,14 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import logging
 import math
 
 import numpy as np
+
+from femcheck.errors import ConvergenceError
+
+log = logging.getLogger(__name__)
 
 #: forward-difference step of a leg's element scale (the model is smooth in it; the scales are O(1))
 _STEP = 1e-3
@@ -165,6 +170,12 @@ def _state(bg: _Background, eff, x):
     return r, G
 
 
+def _upper(eff) -> float:
+    """The largest leg scale a fit of ``eff`` may take (its parameters' upper bound): a Gauss-Newton step of the screen
+    stays where the fit can follow, and the chain is never asked for an element thousands of times softer."""
+    return float(eff.params[0].upper)
+
+
 def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
     """Forward selection of legs with relinearization (see module doc, step 5): ((score, legs), leg scales (6,)) of
     the best subset."""
@@ -181,7 +192,7 @@ def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
         active.append(min(trial)[1])
         for _ in range(iters):   # Gauss-Newton on the active legs, the others at the model's value
             b, _, _ = _lstsq(G[:, active], r)
-            x[active] = np.clip(x[active] + b, 0.0, None)
+            x[active] = np.clip(x[active] + b, 0.0, _upper(eff))
             r, G = _state(bg, eff, x)
         score = ebic(float(r @ r), len(active))
         worse = worse + 1 if score >= best[0] else 0
@@ -196,7 +207,7 @@ def _forward(bg: _Background, eff, score_none, ebic, iters: int = 3):
             for _ in range(iters):
                 r, G = _state(bg, eff, x)
                 b, _, _ = _lstsq(G[:, keep], r)
-                x[keep] = np.clip(x[keep] + b, 0.0, None)
+                x[keep] = np.clip(x[keep] + b, 0.0, _upper(eff))
             r, _ = _state(bg, eff, x)
             trials.append((ebic(float(r @ r), len(keep)), tuple(keep), x))
         score, legs, x = min(trials, key=lambda t: t[0])
@@ -217,7 +228,7 @@ def _uniform(bg: _Background, eff, iters: int = 6) -> tuple[float, float]:
         if _ == iters:
             break
         g = ((d[1] - d[0]) / _STEP / readings.sigma).ravel()
-        a = max(a + float(g @ r) / max(float(g @ g), 1e-300), 0.0)
+        a = min(max(a + float(g @ r) / max(float(g @ g), 1e-300), 0.0), _upper(eff))
     return float(r @ r), a
 
 
@@ -262,12 +273,20 @@ def screen_placements(model, readings, located, keep: int = 3, margin: float = 1
         # a linear minimum at all six legs is not taken as it is: a leg scale far from 1 (a near-rigid element,
         # 0.03) is far outside the linearization at 1, where six free legs always fit best. The nonlinear forward
         # selection decides, up to all six legs
-        (score, legs), x = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        try:
+            (score, legs), x = _forward(bg, eff, chi2_0, ebic)   # 5. the legs, nonlinear
+        except ConvergenceError as exc:   # the chain has no state at those scales: not a placement this type can take
+            log.info("placement of %s not refined: %s", eff.id, exc)
+            continue
         if legs:
             out.append(Placement(eff.restricted(legs), score, chi2_0, t_full, tuple(float(x[i]) for i in legs)))
         if eff.uniform_cause is not None:   # e.g. actuation_compliance: that cause weighs the uniform change
             continue
-        chi2_u, a = _uniform(bg, eff)   # 5'. all legs, one factor: weighed beside the leg set (its own placement)
+        try:
+            chi2_u, a = _uniform(bg, eff)   # 5'. all legs, one factor: weighed beside the leg set (its own placement)
+        except ConvergenceError as exc:
+            log.info("uniform placement of %s not refined: %s", eff.id, exc)
+            continue
         if chi2_u + math.log(N) < chi2_0:
             out.append(Placement(eff.uniform_all(), chi2_u + math.log(N), chi2_0, t_full, (a,)))
     out.sort(key=lambda p: p.score)
